@@ -1,0 +1,90 @@
+"""One exception tree for everything pneunet reports to a user.
+
+Every error says *what* went wrong and *where* (file:line:column, node or element
+name, or simulation time) and, where it helps, *what to try*.  The CLI turns a
+:class:`PneunetError` into a message and an exit code; nothing else escapes.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class SourceSpan:
+    """A position in a netlist file (1-based line and column)."""
+
+    file: str
+    line: int
+    column: int
+    text: str = ""  # the offending source line, for the caret display
+
+    def __str__(self) -> str:
+        return f"{self.file}:{self.line}:{self.column}"
+
+    def caret(self) -> str:
+        """The source line with a caret under the column, or '' without text."""
+        if not self.text:
+            return ""
+        return f"    {self.text.rstrip()}\n    {' ' * (self.column - 1)}^"
+
+
+class PneunetError(Exception):
+    """Base of all errors pneunet raises on purpose.
+
+    ``where`` names the place (element, node, file position or time); ``hint``
+    says what to try.  ``str(err)`` gives the full one-line message, and
+    :meth:`report` a multi-line one with the caret display for netlist errors.
+    """
+
+    exit_code = 2
+
+    def __init__(self, message: str, *, where: str | None = None, hint: str | None = None,
+                 span: SourceSpan | None = None):
+        self.message = message
+        self.where = where if where is not None else (str(span) if span else None)
+        self.hint = hint
+        self.span = span
+        super().__init__(self._one_line())
+
+    def _one_line(self) -> str:
+        text = f"{self.where}: {self.message}" if self.where else self.message
+        if self.hint:
+            text += f" (hint: {self.hint})"
+        return text
+
+    def report(self) -> str:
+        """Multi-line text for a terminal: message, caret display, hint."""
+        head = f"{self.where}: error: {self.message}" if self.where else f"error: {self.message}"
+        lines = [head]
+        if self.span is not None and self.span.caret():
+            lines.append(self.span.caret())
+        if self.hint:
+            lines.append(f"hint: {self.hint}")
+        return "\n".join(lines)
+
+
+class NetlistError(PneunetError):
+    """Malformed netlist text: syntax, units, unknown names, bad includes."""
+
+
+class TopologyError(PneunetError):
+    """A circuit whose graph cannot be simulated (floating or unknown nodes...)."""
+
+
+class ParameterError(PneunetError):
+    """A parameter value outside its valid range or of the wrong dimension."""
+
+
+class DataError(PneunetError):
+    """Measured data that cannot be used as given (missing columns, NaNs...)."""
+
+
+class SolverError(PneunetError):
+    """A simulation that could not be completed; carries the time reached."""
+
+    exit_code = 1
+
+    def __init__(self, message: str, *, time: float | None = None, partial=None, **kwargs):
+        self.time = time
+        self.partial = partial  # the Solution up to the failure, if any
+        super().__init__(message, **kwargs)

@@ -1,0 +1,122 @@
+"""Flow laws of the paper, vectorised over numpy arrays, with their derivatives.
+
+* quadrature (isothermal compressible) resistor, eq. 4: ṁ = √(p₁² − p₂²)/R
+* six-parameter membrane valve, eqs. 13, 19 and 25
+
+Units: kPa (absolute), mg/s, kPa·s/mg.
+
+Zero-flow regularisation
+------------------------
+√d has an infinite slope at d = p₁² − p₂² = 0, which stalls Newton iterations.
+Circuit simulation therefore uses the signed regularised root
+
+    sr(d) = d / (d² + ε²)^(1/4)
+
+which equals sign(d)·√|d| to a relative error below 1 % once |d| > 7ε and is
+linear, with slope ε^(-1/2), for |d| ≪ ε.  ε (kPa², option ``flow_band``) is
+documented in docs/numerics.md; the tests show results do not depend on it.
+Identification uses the exact root (ε = 0).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+DEFAULT_FLOW_BAND_KPA2 = 10.0
+
+
+def signed_root(d, band=0.0):
+    """sr(d) = d/(d²+ε²)^¼ and its derivative d sr/dd (exact √ when band == 0)."""
+    d = np.asarray(d, dtype=float)
+    if band == 0.0:
+        root = np.sqrt(np.abs(d))
+        value = np.sign(d) * root
+        with np.errstate(divide="ignore"):
+            slope = np.where(root > 0, 0.5 / np.where(root > 0, root, 1.0), np.inf)
+        return value, slope
+    s = d * d + band * band
+    value = d / s ** 0.25
+    slope = (0.5 * d * d + band * band) / s ** 1.25
+    return value, slope
+
+
+def quadrature_flow(p_a, p_b, resistance, band=DEFAULT_FLOW_BAND_KPA2):
+    """Mass flow a→b through a quadrature resistor and its partials.
+
+    Returns ``(mdot, dmdot_dpa, dmdot_dpb)`` in mg/s and mg/(s·kPa).
+    """
+    root, slope = signed_root(p_a * p_a - p_b * p_b, band)
+    mdot = root / resistance
+    return mdot, 2.0 * p_a * slope / resistance, -2.0 * p_b * slope / resistance
+
+
+def series_resistance(*resistances):
+    """Quadrature resistors in series add in quadrature (eq. 5), kPa·s/mg."""
+    return float(np.sqrt(np.sum(np.square(resistances))))
+
+
+def valve_opening(delta_p, p_close, p_trans):
+    """Normalised opening u = (Δp − p_close)/(p_trans − p_close), 0 when closed."""
+    return np.maximum(delta_p - p_close, 0.0) / (p_trans - p_close)
+
+
+def valve_conductance(delta_p, r_f, p_close, p_trans, e):
+    """Valve conductance 1/R = u^e / (R_f·√(1+u^(2e))) (eq. 19) and d(1/R)/dΔp.
+
+    Written with u^e in the numerator so that it is exact and smooth as the valve
+    closes (u → 0).  Returns ``(G, dG_ddp)`` in mg/(s·kPa) and mg/(s·kPa²).
+    """
+    u = valve_opening(delta_p, p_close, p_trans)
+    ue = u ** e
+    q = 1.0 + ue * ue
+    g = ue / (r_f * np.sqrt(q))
+    open_ = u > 0
+    u_safe = np.where(open_, u, 1.0)
+    dg_du = np.where(open_, e * u_safe ** (e - 1.0), 0.0) / (r_f * q ** 1.5)
+    return g, dg_du / (p_trans - p_close)
+
+
+def valve_delta_p(p_in, p_out, p_ctrl, a_in, a_out):
+    """Equivalent membrane pressure difference Δp (eq. 13 / 25), kPa.
+
+    a_in belongs to whichever of the two flow ports has the higher pressure.
+    """
+    forward = p_in >= p_out
+    hi = np.where(forward, p_in, p_out)
+    lo = np.where(forward, p_out, p_in)
+    return a_in * hi + a_out * lo - p_ctrl
+
+
+def valve_flow(p_in, p_out, p_ctrl, Rf, pclose, ptrans, e, ain, aout, band=0.0):
+    """Signed mass flow in→out of the six-parameter valve (eqs. 19, 25), mg/s.
+
+    Parameter names follow :class:`pneunet.valve_params.ValveParams`, so
+    ``valve_flow(p_in, p_out, p_ctrl, **params.as_dict())`` works.  Exact law by
+    default (``band=0``), as used for identification; circuits pass their flow
+    band.  Arrays broadcast.
+    """
+    mdot, _ = valve_flow_and_partials(p_in, p_out, p_ctrl, Rf, pclose, ptrans, e, ain, aout,
+                                      band, partials=False)
+    return mdot
+
+
+def valve_flow_and_partials(p_in, p_out, p_ctrl, Rf, pclose, ptrans, e, ain, aout,
+                            band=DEFAULT_FLOW_BAND_KPA2, partials=True):
+    """Valve flow in→out and its partials with respect to (p_in, p_out, p_ctrl).
+
+    Returns ``(mdot, (d_in, d_out, d_ctrl))``; the tuple is None when
+    ``partials`` is False.
+    """
+    p_in, p_out, p_ctrl = (np.asarray(x, dtype=float) for x in (p_in, p_out, p_ctrl))
+    forward = p_in >= p_out
+    dp = valve_delta_p(p_in, p_out, p_ctrl, ain, aout)
+    g, dg = valve_conductance(dp, Rf, pclose, ptrans, e)
+    root, slope = signed_root(p_in * p_in - p_out * p_out, band)
+    mdot = g * root
+    if not partials:
+        return mdot, None
+    ddp_din = np.where(forward, ain, aout)
+    ddp_dout = np.where(forward, aout, ain)
+    d_in = dg * ddp_din * root + g * slope * 2.0 * p_in
+    d_out = dg * ddp_dout * root - g * slope * 2.0 * p_out
+    d_ctrl = -dg * root
+    return mdot, (d_in, d_out, d_ctrl)

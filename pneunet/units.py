@@ -1,0 +1,136 @@
+"""Units: convert user quantities to pneunet's internal units (pint does the work).
+
+Internal units (see :mod:`pneunet.gas`): kPa absolute, mg/s, kPa·s/mg, mL, mm, s, K.
+
+Each *slot* (a parameter's kind) has one internal unit.  Two pneumatic
+conventions go beyond plain unit conversion:
+
+* **gauge pressure** — a pressure unit with a trailing ``g`` (``200kPag``,
+  ``4.96barg``, ``72psig``) is relative to the ambient pressure, which is added
+  when converting to an absolute pressure;
+* **normal volume flow** — a volume flow (``40L/min``, ``slpm``) in a mass-flow
+  slot means litres at normal conditions (0 °C, 101.325 kPa) and is converted
+  with the gas's normal density.
+"""
+from __future__ import annotations
+
+import functools
+import re
+from dataclasses import dataclass
+
+from .errors import ParameterError
+from .gas import AIR, STANDARD_ATMOSPHERE_KPA, Gas
+
+#: slot -> (internal unit, pint dimensionality written as a unit of that slot)
+SLOTS = {
+    "pressure": "kPa",       # absolute pressure
+    "pressure_difference": "kPa",
+    "flow": "mg/s",
+    "resistance": "kPa*s/mg",
+    "volume": "mL",
+    "length": "mm",
+    "time": "s",
+    "temperature": "K",
+    "frequency": "Hz",
+    "dimensionless": "",
+}
+
+GAUGE_UNITS = ("kPag", "barg", "psig", "Pag", "MPag", "mbarg", "hPag", "atmg")
+_QUANTITY = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(.*?)\s*$")
+
+
+@functools.lru_cache(maxsize=1)
+def registry():
+    """The shared pint registry (created on first use: pint is slow to import)."""
+    import pint
+
+    ureg = pint.UnitRegistry(autoconvert_offset_to_baseunit=True)
+    ureg.define("slpm = liter / minute")   # standard litre per minute (a normal flow)
+    ureg.define("sccm = milliliter / minute")
+    return ureg
+
+
+@dataclass(frozen=True)
+class Quantity:
+    """A parsed literal: magnitude, unit text and whether the pressure is gauge."""
+
+    magnitude: float
+    unit: str
+    gauge: bool = False
+
+
+def split_quantity(text: str) -> Quantity:
+    """Split ``'200 kPag'`` into magnitude 200, unit 'kPa', gauge True."""
+    m = _QUANTITY.match(text)
+    if not m:
+        raise ParameterError(f"cannot read {text!r} as a number with a unit")
+    magnitude, unit = float(m.group(1)), m.group(2)
+    gauge = unit in GAUGE_UNITS
+    if gauge:
+        unit = unit[:-1]
+    return Quantity(magnitude, unit, gauge)
+
+
+def to_internal(value, unit: str, slot: str, *, gauge: bool = False,
+                ambient_kpa: float = STANDARD_ATMOSPHERE_KPA, gas: Gas = AIR,
+                name: str = "value"):
+    """Convert ``value`` (scalar or array) given in ``unit`` to the slot's internal unit.
+
+    ``name`` is used in error messages ("Rout: R needs kPa·s/mg, got kPa").
+    """
+    if slot not in SLOTS:
+        raise ValueError(f"unknown slot {slot!r}")
+    target = SLOTS[slot]
+    if gauge and slot != "pressure":
+        raise ParameterError(f"{name}: a gauge unit only makes sense for a pressure, got {unit}g")
+    if not unit:
+        converted = value
+    else:
+        converted = _convert(value, unit, target, slot, gas, name)
+    if gauge:
+        converted = converted + ambient_kpa
+    return converted
+
+
+def _convert(value, unit, target, slot, gas, name):
+    import pint
+
+    ureg = registry()
+    try:
+        q = ureg.Quantity(value, unit)
+    except (pint.errors.UndefinedUnitError, AttributeError, TypeError, ValueError,
+            AssertionError) as exc:
+        raise ParameterError(f"{name}: unknown unit {unit!r}",
+                             hint=f"{slot} is given in {target or 'no unit'}, e.g. "
+                                  f"{example(slot)}") from exc
+    try:
+        return q.to(target or "dimensionless").magnitude
+    except pint.errors.DimensionalityError:
+        pass
+    if slot == "flow" and q.check("[volume]/[time]"):
+        normal_ml_s = q.to("mL/s").magnitude
+        return normal_ml_s * gas.normal_density_mg_ml
+    raise ParameterError(f"{name} needs {pretty(target)}, got {unit}",
+                         hint=f"write it like {example(slot)}")
+
+
+def pretty(unit: str) -> str:
+    return unit.replace("*", "·") if unit else "a plain number"
+
+
+_EXAMPLES = {
+    "pressure": "496kPa, 4.96bar, 72psi or 200kPag (gauge)",
+    "pressure_difference": "20kPa or 0.2bar",
+    "flow": "870mg/s or 40L/min (normal litres)",
+    "resistance": "0.566kPa*s/mg",
+    "volume": "200mL or 0.2L",
+    "length": "173mm or 1.2cm",
+    "time": "5ms or 2s",
+    "temperature": "293.15K or 20degC",
+    "frequency": "2Hz",
+    "dimensionless": "1.5",
+}
+
+
+def example(slot: str) -> str:
+    return _EXAMPLES.get(slot, "")
