@@ -1,0 +1,45 @@
+"""pneunet: lumped-parameter pneumatic circuits of fluid-driven membrane valves.
+
+``import pneunet`` stays light: the public names below are loaded on first use.
+
+Units everywhere: absolute pressure kPa, mass flow mg/s, resistance kPa·s/mg,
+volume mL, time s (see :mod:`pneunet.gas`).
+"""
+from __future__ import annotations
+
+import importlib
+
+__version__ = "0.1.0"
+
+_LAZY = {
+    "Circuit": "pneunet.circuit",
+    "SimulationOptions": "pneunet.options",
+    "transient": "pneunet.simulate",
+    "operating_point": "pneunet.simulate",
+    "Solution": "pneunet.solution",
+    "ValveParams": "pneunet.valve_params",
+    "PAPER_VALVES": "pneunet.valve_params",
+    "waveforms": "pneunet.waveforms",
+    "PneunetError": "pneunet.errors",
+    "NetlistError": "pneunet.errors",
+    "TopologyError": "pneunet.errors",
+    "ParameterError": "pneunet.errors",
+    "DataError": "pneunet.errors",
+    "SolverError": "pneunet.errors",
+    "AIR": "pneunet.gas",
+}
+
+__all__ = sorted(_LAZY) + ["__version__"]
+
+
+def __getattr__(name):
+    if name in _LAZY:
+        module = importlib.import_module(_LAZY[name])
+        value = module if name == "waveforms" else getattr(module, name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'pneunet' has no attribute {name!r}")
+
+
+def __dir__():
+    return __all__
