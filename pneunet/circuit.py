@@ -1,0 +1,204 @@
+"""Circuit: elements joined at named nodes, backed by a networkx graph.
+
+Build one from Python::
+
+    c = Circuit("oscillator")
+    c.pressure_source("PH", "supply", 496)           # kPa absolute
+    c.valve("X1", "supply", "out", "tank", model="axi")
+    c.resistor("Rout", "out", "tank", R=1.132)       # kPa·s/mg
+    c.volume("V1", "tank", V="200mL")
+    c.resistor("Rvent", "tank", "atm", R=3)
+    sol = c.tran(20)
+
+Numbers are in pneunet's internal units (kPa, mg/s, kPa·s/mg, mL, mm, s);
+strings carry their own unit (``"4.96bar"``, ``"200kPag"``).  The reference
+nodes ``0``, ``gnd`` and ``atm`` are at the ambient pressure.
+"""
+from __future__ import annotations
+
+import difflib
+from typing import Any
+
+import numpy as np
+
+from . import elements
+from .errors import ParameterError, SourceSpan, TopologyError
+from .elements.base import ElementSpec
+from .options import SimulationOptions
+from .units import split_quantity, to_internal
+from .valve_params import ValveParams, paper_valve
+from .waveforms import Waveform, as_waveform
+
+REFERENCE_NODES = ("0", "gnd", "atm")
+
+
+class Circuit:
+    """A pneumatic circuit; see the module docstring for an example."""
+
+    def __init__(self, title: str = "", options: SimulationOptions | None = None, **option_values):
+        self.title = title
+        self.options = (options or SimulationOptions()).replace(**option_values) \
+            if option_values else (options or SimulationOptions())
+        self.elements: dict[str, ElementSpec] = {}
+        self.initial: dict[str, float] = {}
+
+    # -- building ---------------------------------------------------------------
+    def add(self, kind: str, name: str, nodes, *, span: SourceSpan | None = None,
+            **params) -> ElementSpec:
+        """Add an element of a registered kind; parameters are checked and converted."""
+        family = elements.family(kind)
+        where = f"{span}: element {name}" if span else f"element {name}"
+        if not name:
+            raise ParameterError("an element needs a name", where=str(span) if span else None)
+        if name in self.elements:
+            first = self.elements[name].span
+            raise TopologyError(f"duplicate element name {name!r}", where=where,
+                                hint=f"first defined at {first}" if first else "names must be unique")
+        nodes = tuple(str(n) for n in nodes)
+        if len(nodes) != len(family.ports):
+            raise TopologyError(
+                f"{family.kind} needs {len(family.ports)} node(s) ({' '.join(family.ports)}), "
+                f"got {len(nodes)}", where=where)
+        values = self._convert_params(family, params, where)
+        spec = ElementSpec(family.kind, name, nodes, values, span)
+        family.check_spec(spec)
+        self.elements[name] = spec
+        return spec
+
+    def _convert_params(self, family, params, where) -> dict[str, Any]:
+        unknown = [k for k in params if k not in family.params]
+        if unknown:
+            close = difflib.get_close_matches(unknown[0], family.params, n=1)
+            raise ParameterError(
+                f"unknown parameter {unknown[0]!r} for {family.kind}", where=where,
+                hint=f"did you mean {close[0]!r}?" if close else
+                "known: " + ", ".join(family.params))
+        out = {}
+        for key, spec in family.params.items():
+            if key not in params or params[key] is None:
+                if spec.required:
+                    raise ParameterError(f"missing parameter {key} ({spec.doc})", where=where)
+                out[key] = spec.default
+                continue
+            value = params[key]
+            if spec.kind == "object":
+                out[key] = value
+            elif spec.kind == "waveform" and isinstance(value, Waveform):
+                out[key] = value
+            else:
+                number = self._number(value, spec.slot, f"{key}", where)
+                spec.check(number, where, key)
+                out[key] = as_waveform(number) if spec.kind == "waveform" else number
+        return out
+
+    def _number(self, value, slot, name, where) -> float:
+        if isinstance(value, str):
+            try:
+                q = split_quantity(value)
+                return float(to_internal(q.magnitude, q.unit, slot, gauge=q.gauge,
+                                         ambient_kpa=self.options.ambient,
+                                         gas=self.options.gas_model, name=name))
+            except ParameterError as err:
+                raise ParameterError(err.message, where=where, hint=err.hint) from None
+        try:
+            return float(value)
+        except (TypeError, ValueError):
+            raise ParameterError(f"{name} must be a number, got {value!r}", where=where) from None
+
+    # -- convenience constructors (one per built-in family) -------------------------
+    def pressure_source(self, name, node, value, **kw):
+        """Absolute pressure (kPa or a :mod:`~pneunet.waveforms` waveform) at ``node``."""
+        return self.add("pressure_source", name, (node,), value=value, **kw)
+
+    def flow_source(self, name, a, b, value, **kw):
+        """Mass flow (mg/s or a waveform) from node ``a`` to node ``b``."""
+        return self.add("flow_source", name, (a, b), value=value, **kw)
+
+    def resistor(self, name, a, b, R, **kw):
+        """Quadrature resistor of resistance ``R`` (kPa·s/mg)."""
+        return self.add("resistor", name, (a, b), R=R, **kw)
+
+    def pipe(self, name, a, b, length, diameter, f=None, **kw):
+        """Tube resistor from length and diameter (mm) and Fanning friction factor."""
+        return self.add("pipe", name, (a, b), length=length, diameter=diameter, f=f, **kw)
+
+    def volume(self, name, node, V, n=None, p0=None, **kw):
+        """Rigid volume ``V`` (mL), polytropic exponent ``n``, initial pressure ``p0``."""
+        return self.add("volume", name, (node,), V=V, n=n, p0=p0, **kw)
+
+    def actuator(self, name, node, V=None, length=None, diameter=None, p0=None, **kw):
+        """McKibben actuator as a volume: ``V`` (mL) or cylinder ``length`` × ``diameter`` (mm)."""
+        return self.add("actuator", name, (node,), V=V, length=length, diameter=diameter,
+                        p0=p0, **kw)
+
+    def valve(self, name, inlet, outlet, ctrl, model, backward=None, **kw):
+        """Membrane valve; ``model`` is a ValveParams, a paper valve name or a flow model."""
+        return self.add("valve", name, (inlet, outlet, ctrl), model=resolve_valve_model(model),
+                        backward=resolve_valve_model(backward) if backward else None, **kw)
+
+    def set_initial(self, node: str, pressure) -> None:
+        """Initial pressure of a node (netlist ``.ic``), kPa or a string with unit."""
+        self.initial[node] = self._number(pressure, "pressure", f"initial pressure of {node}",
+                                          f"node {node}")
+
+    # -- inspection ---------------------------------------------------------------
+    @property
+    def nodes(self) -> list[str]:
+        seen = dict.fromkeys(n for e in self.elements.values() for n in e.nodes)
+        return list(seen)
+
+    def is_reference(self, node: str) -> bool:
+        return node.lower() in REFERENCE_NODES
+
+    def graph(self):
+        """networkx MultiGraph: nodes are circuit nodes, edges join an element's ports."""
+        import networkx as nx
+
+        g = nx.MultiGraph()
+        g.add_nodes_from(self.nodes)
+        for e in self.elements.values():
+            for i in range(len(e.nodes)):
+                for j in range(i + 1, len(e.nodes)):
+                    g.add_edge(e.nodes[i], e.nodes[j], element=e.name)
+        return g
+
+    def validate(self) -> None:
+        """Raise :class:`TopologyError` for a circuit that cannot be simulated."""
+        from .topology import check_topology
+
+        check_topology(self)
+
+    def summary(self) -> str:
+        """A short human-readable description of nodes and elements."""
+        kinds: dict[str, int] = {}
+        for e in self.elements.values():
+            kinds[e.kind] = kinds.get(e.kind, 0) + 1
+        lines = [f"circuit {self.title!r}: {len(self.nodes)} nodes, {len(self.elements)} elements"]
+        lines += [f"  {k}: {v}" for k, v in sorted(kinds.items())]
+        lines.append("  nodes: " + " ".join(self.nodes))
+        return "\n".join(lines)
+
+    # -- analyses -------------------------------------------------------------------
+    def tran(self, t_stop: float, **kwargs):
+        """Transient analysis; see :func:`pneunet.simulate.transient`."""
+        from .simulate import transient
+
+        return transient(self, t_stop, **kwargs)
+
+    def op(self, **kwargs):
+        """Operating point; see :func:`pneunet.simulate.operating_point`."""
+        from .simulate import operating_point
+
+        return operating_point(self, **kwargs)
+
+
+def resolve_valve_model(model):
+    """A ValveParams, a named paper valve, a parameter dict, or a flow-model object."""
+    if isinstance(model, str):
+        return paper_valve(model)
+    if isinstance(model, dict):
+        return ValveParams(**model)
+    if isinstance(model, ValveParams) or callable(getattr(model, "flow", None)):
+        return model
+    raise ParameterError(f"a valve model must be a ValveParams, a paper valve name or an object "
+                         f"with a flow(p_in, p_out, p_ctrl) method, got {model!r}")

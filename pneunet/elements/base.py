@@ -1,0 +1,141 @@
+"""The fixed interface every element family implements, and its parameter specs.
+
+An element *family* (all resistors, all valves, …) is evaluated for all its
+instances at once.  The assembler only sees this interface:
+
+* ``ports``: names of the element's nodes, in netlist order;
+* ``params``: a :class:`Param` per parameter (slot/unit, valid range, default);
+* ``outflows(t, p, pdot)``: mass flow from each port's node *into* the element,
+  shape (n, n_ports), with partials ``dq_dp`` and ``dq_dpdot`` (n, n_ports, n_ports);
+* ``flow_ports``: ports through which flow can pass (a valve's control port
+  passes none), used by the topology checks;
+* ``storage_ports``: ports through which the element stores mass (their nodes
+  become differential unknowns);
+* ``pinned_ports`` and ``pinned_pressure(t)``: ports whose node pressure the
+  element imposes (pressure sources);
+* ``signals(t, p)``: named per-instance results for the solution (flows…).
+
+The assembler never asks what type an element is.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+import numpy as np
+
+from ..errors import ParameterError, SourceSpan
+
+
+@dataclass(frozen=True)
+class Param:
+    """A parameter: its slot (see :mod:`pneunet.units`), valid range and default."""
+
+    slot: str
+    doc: str
+    low: float = -np.inf
+    high: float = np.inf
+    default: Any = None
+    low_inclusive: bool = True
+    kind: str = "number"  # 'number', 'waveform' or 'object'
+
+    @property
+    def required(self) -> bool:
+        return self.default is None
+
+    def check(self, value: float, where: str, name: str) -> None:
+        from ..units import SLOTS, pretty
+
+        unit = pretty(SLOTS[self.slot])
+        if not np.isfinite(value):
+            raise ParameterError(f"{name} must be a finite number, got {value}", where=where)
+        too_low = value < self.low if self.low_inclusive else value <= self.low
+        if too_low or value > self.high:
+            lo = "[" if self.low_inclusive else "("
+            raise ParameterError(
+                f"{name}={value:g} {unit} is outside its valid range {lo}{self.low:g}, {self.high:g}]",
+                where=where, hint=self.doc)
+
+
+@dataclass
+class ElementSpec:
+    """One element as the user described it (converted to internal units)."""
+
+    kind: str
+    name: str
+    nodes: tuple[str, ...]
+    params: dict[str, Any]
+    span: SourceSpan | None = None
+
+    @property
+    def where(self) -> str:
+        return f"{self.span}: element {self.name}" if self.span else f"element {self.name}"
+
+
+@dataclass
+class FamilyContext:
+    """What families need from the circuit: options and the gas."""
+
+    options: Any  # SimulationOptions
+
+    @property
+    def gas(self):
+        return self.options.gas_model
+
+
+class ElementFamily:
+    """Base class of element families (see module docstring)."""
+
+    kind: ClassVar[str] = ""
+    aliases: ClassVar[tuple[str, ...]] = ()
+    description: ClassVar[str] = ""
+    ports: ClassVar[tuple[str, ...]] = ()
+    params: ClassVar[dict[str, Param]] = {}
+    flow_ports: ClassVar[tuple[int, ...] | None] = None  # ports that pass flow (None: all)
+    storage_ports: ClassVar[tuple[int, ...]] = ()
+    pinned_ports: ClassVar[tuple[int, ...]] = ()
+
+    def __init__(self, specs: list[ElementSpec], context: FamilyContext):
+        self.specs = specs
+        self.names = [s.name for s in specs]
+        self.context = context
+        self.n = len(specs)
+
+    @classmethod
+    def check_spec(cls, spec: ElementSpec) -> None:
+        """Checks across parameters (single values are checked by :class:`Param`)."""
+
+    def column(self, name: str) -> np.ndarray:
+        """All instances' values of a numeric parameter, as an array."""
+        return np.array([s.params[name] for s in self.specs], dtype=float)
+
+    # -- physics ----------------------------------------------------------------
+    def outflows(self, t: float, p: np.ndarray, pdot: np.ndarray):
+        """Flows (n, n_ports) out of each port's node, ``dq_dp``, ``dq_dpdot`` (or None)."""
+        n_ports = len(self.ports)
+        zero = np.zeros((self.n, n_ports))
+        return zero, np.zeros((self.n, n_ports, n_ports)), None
+
+    def pinned_pressure(self, t: float) -> np.ndarray:
+        """Pressures (n, len(pinned_ports)) imposed at pinned ports, kPa."""
+        return np.empty((self.n, 0))
+
+    def jumps(self, t_start: float, t_stop: float) -> np.ndarray:
+        """Times where an input of this family jumps (the solver restarts there)."""
+        return np.empty(0)
+
+    def breakpoints(self, t_start: float, t_stop: float) -> np.ndarray:
+        """Times where an input's slope jumps (the solver steps onto them)."""
+        return np.empty(0)
+
+    def initial_pressure(self) -> np.ndarray:
+        """Initial pressure (n,) of storage instances, NaN where not set, kPa."""
+        return np.full(self.n, np.nan)
+
+    def signals(self, t: np.ndarray, p: np.ndarray) -> dict[str, tuple[str, np.ndarray]]:
+        """Named results per instance over time: {suffix: (unit, array (n_t, n))}.
+
+        ``p`` has shape (n_t, n, n_ports).  The solution names each signal
+        ``<suffix>_<element>``, e.g. ``mdot_Rout``.
+        """
+        return {}

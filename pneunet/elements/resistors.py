@@ -1,0 +1,73 @@
+"""Quadrature resistors (eq. 4): by resistance, or by pipe geometry (eq. 6)."""
+from __future__ import annotations
+
+import numpy as np
+
+from ..gas import GAS_CONSTANT
+from ..laws import quadrature_flow
+from . import register
+from .base import ElementFamily, Param
+
+
+def pipe_resistance(length_mm, diameter_mm, friction, temperature_k, molar_mass_g_mol):
+    """Weymouth resistance R = 8·√(f·L·R·T/(π²·D⁵·M)) (eq. 6), in kPa·s/mg.
+
+    ``friction`` is the Fanning friction factor f (Darcy λ = 4f).
+    """
+    length, diameter = length_mm * 1e-3, diameter_mm * 1e-3
+    r_si = 8.0 * np.sqrt(friction * length * GAS_CONSTANT * temperature_k
+                         / (np.pi ** 2 * diameter ** 5 * molar_mass_g_mol * 1e-3))
+    return r_si * 1e-9  # Pa·s/kg -> kPa·s/mg
+
+
+class _QuadratureFamily(ElementFamily):
+    ports = ("a", "b")
+
+    def resistance(self) -> np.ndarray:
+        raise NotImplementedError
+
+    def outflows(self, t, p, pdot):
+        mdot, d_a, d_b = quadrature_flow(p[:, 0], p[:, 1], self._r,
+                                         self.context.options.flow_band)
+        dq = np.empty((self.n, 2, 2))
+        dq[:, 0, 0], dq[:, 0, 1] = d_a, d_b
+        dq[:, 1, 0], dq[:, 1, 1] = -d_a, -d_b
+        return np.stack([mdot, -mdot], axis=1), dq, None
+
+    def signals(self, t, p):
+        mdot, _, _ = quadrature_flow(p[..., 0], p[..., 1], self._r, self.context.options.flow_band)
+        return {"mdot": ("mg/s", mdot)}
+
+
+@register
+class Resistor(_QuadratureFamily):
+    """Quadrature resistor: ṁ = √(p_a² − p_b²)/R, both directions."""
+
+    kind = "resistor"
+    aliases = ("R",)
+    description = "quadrature resistor ṁ = √(p_a² − p_b²)/R"
+    params = {"R": Param("resistance", "resistance, kPa·s/mg", low=0.0, low_inclusive=False)}
+
+    def __init__(self, specs, context):
+        super().__init__(specs, context)
+        self._r = self.column("R")
+
+
+@register
+class Pipe(_QuadratureFamily):
+    """Tube of length L and inner diameter D with Fanning friction factor f (eq. 6)."""
+
+    kind = "pipe"
+    description = "tube resistor from length, inner diameter and friction factor (eq. 6)"
+    params = {
+        "length": Param("length", "tube length, mm", low=0.0, low_inclusive=False),
+        "diameter": Param("length", "inner diameter, mm", low=0.0, low_inclusive=False),
+        "f": Param("dimensionless", "Fanning friction factor (Darcy λ = 4f)", low=0.0,
+                   high=1.0, low_inclusive=False, default=0.008),
+    }
+
+    def __init__(self, specs, context):
+        super().__init__(specs, context)
+        opts = context.options
+        self._r = pipe_resistance(self.column("length"), self.column("diameter"),
+                                  self.column("f"), opts.temperature, context.gas.molar_mass_g_mol)

@@ -1,0 +1,106 @@
+"""Membrane valves: the six-parameter model (eqs. 13, 19, 25), three ports.
+
+Ports ``in``, ``out``, ``ctrl``.  Flow goes from the higher to the lower of
+``in``/``out``; a_in belongs to the higher port (eq. 25).  The control chamber
+is a dead end: no flow enters it.
+
+``model`` is a :class:`~pneunet.valve_params.ValveParams` (evaluated analytically,
+vectorised over all such valves) or any object with a vectorised method
+``flow(p_in, p_out, p_ctrl) -> mdot`` — e.g. a valve model extended with
+physical effects — whose partials are taken by central differences.  An
+optional ``backward`` ValveParams applies when p_out > p_in (mirror valves, Table 1).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..laws import valve_delta_p, valve_flow_and_partials, valve_opening
+from ..valve_params import ValveParams
+from . import register
+from .base import ElementFamily, Param
+
+_FD_STEP_KPA = 1e-4
+
+
+@register
+class MembraneValve(ElementFamily):
+    """Fluid-driven membrane valve (six-parameter model)."""
+
+    kind = "valve"
+    aliases = ("X", "membrane_valve")
+    description = "membrane valve with ports in, out, ctrl (six-parameter model)"
+    ports = ("in", "out", "ctrl")
+    flow_ports = (0, 1)
+    params = {
+        "model": Param("dimensionless", "ValveParams or a model with flow(p_in, p_out, p_ctrl)",
+                       kind="object"),
+        "backward": Param("dimensionless", "ValveParams for flow out→in (default: model)",
+                          kind="object", default=False),
+    }
+
+    def __init__(self, specs, context):
+        super().__init__(specs, context)
+        models = [s.params["model"] for s in specs]
+        self._analytic = np.array([isinstance(m, ValveParams) for m in models])
+        fwd = [m if isinstance(m, ValveParams) else None for m in models]
+        self._fwd = _param_arrays(fwd)
+        has_backward = any(s.params["backward"] for s in specs)
+        self._bwd = (_param_arrays([s.params["backward"] or m for s, m in zip(specs, fwd)])
+                     if has_backward else None)
+        self._custom = {}
+        for i, m in enumerate(models):
+            if not self._analytic[i]:
+                self._custom.setdefault(id(m), (m, []))[1].append(i)
+
+    def _analytic_flow(self, p, partials=True):
+        band = self.context.options.flow_band
+        fwd = valve_flow_and_partials(p[..., 0], p[..., 1], p[..., 2], **self._fwd, band=band,
+                                      partials=partials)
+        if self._bwd is None:
+            return fwd
+        bwd = valve_flow_and_partials(p[..., 0], p[..., 1], p[..., 2], **self._bwd, band=band,
+                                      partials=partials)
+        forward = p[..., 0] >= p[..., 1]
+        mdot = np.where(forward, fwd[0], bwd[0])
+        if not partials:
+            return mdot, None
+        return mdot, tuple(np.where(forward, a, b) for a, b in zip(fwd[1], bwd[1]))
+
+    def outflows(self, t, p, pdot):
+        mdot, (d_in, d_out, d_ctrl) = self._analytic_flow(p)
+        grads = np.stack([d_in, d_out, d_ctrl], axis=1)
+        for model, idx in self._custom.values():
+            mdot[idx], grads[idx] = _numeric_flow(model, p[idx])
+        q = np.zeros((self.n, 3))
+        q[:, 0], q[:, 1] = mdot, -mdot
+        dq = np.zeros((self.n, 3, 3))
+        dq[:, 0, :], dq[:, 1, :] = grads, -grads
+        return q, dq, None
+
+    def signals(self, t, p):
+        mdot, _ = self._analytic_flow(p, partials=False)
+        for model, idx in self._custom.values():
+            mdot[:, idx] = model.flow(p[:, idx, 0], p[:, idx, 1], p[:, idx, 2])
+        dp = valve_delta_p(p[..., 0], p[..., 1], p[..., 2], self._fwd["ain"], self._fwd["aout"])
+        opening = valve_opening(dp, self._fwd["pclose"], self._fwd["ptrans"])
+        return {"mdot": ("mg/s", mdot), "dp": ("kPa", dp), "opening": ("1", opening)}
+
+
+def _param_arrays(params: list[ValveParams | None]) -> dict[str, np.ndarray]:
+    """Columns of valve parameters; placeholders (never used) for custom models."""
+    filler = ValveParams(Rf=1.0, pclose=0.0, ptrans=1.0, e=1.0, ain=0.5, aout=0.5)
+    rows = [p or filler for p in params]
+    return {k: np.array([getattr(r, k) for r in rows]) for k in ValveParams.__dataclass_fields__}
+
+
+def _numeric_flow(model, p):
+    """Flow of a custom valve model and its partials by central differences."""
+    mdot = np.asarray(model.flow(p[:, 0], p[:, 1], p[:, 2]), dtype=float)
+    grads = np.empty((len(p), 3))
+    for j in range(3):
+        hi, lo = p.copy(), p.copy()
+        hi[:, j] += _FD_STEP_KPA
+        lo[:, j] -= _FD_STEP_KPA
+        grads[:, j] = (model.flow(hi[:, 0], hi[:, 1], hi[:, 2])
+                       - model.flow(lo[:, 0], lo[:, 1], lo[:, 2])) / (2 * _FD_STEP_KPA)
+    return mdot, grads

@@ -1,0 +1,59 @@
+"""Simulation options: tolerances, ambient conditions, gas and numerical bands."""
+from __future__ import annotations
+
+from dataclasses import dataclass, fields, replace
+
+from .errors import ParameterError
+from .gas import AIR, GASES, ROOM_TEMPERATURE_K, STANDARD_ATMOSPHERE_KPA, Gas
+from .laws import DEFAULT_FLOW_BAND_KPA2
+
+
+@dataclass(frozen=True)
+class SimulationOptions:
+    """Options of a circuit's analyses (netlist ``.options``).
+
+    rtol, atol          relative and absolute (kPa) tolerances of IDA
+    ambient             ambient pressure in kPa: reference nodes and gauge units
+    temperature         gas temperature in K (isothermal elements)
+    gas                 name of the gas ('air', 'nitrogen')
+    flow_band           zero-flow regularisation band ε in kPa² (see laws.signed_root)
+    dead_volume         volume in mL added at every node without a volume; 0 keeps
+                        those nodes algebraic and folds are crossed by explicit jumps
+    max_step            largest IDA step in s (0: no limit)
+    fold_threshold      fold indicator below which a jump to the other branch is made
+    """
+
+    rtol: float = 1e-5
+    atol: float = 1e-5
+    ambient: float = STANDARD_ATMOSPHERE_KPA
+    temperature: float = ROOM_TEMPERATURE_K
+    gas: str = "air"
+    flow_band: float = DEFAULT_FLOW_BAND_KPA2
+    dead_volume: float = 0.0
+    max_step: float = 0.0
+    fold_threshold: float = 1e-2
+
+    _RANGES = {
+        "rtol": (1e-12, 1e-2), "atol": (1e-12, 10.0), "ambient": (1.0, 1e4),
+        "temperature": (1.0, 2000.0), "flow_band": (1e-6, 1e4), "dead_volume": (0.0, 1e6),
+        "max_step": (0.0, 1e9), "fold_threshold": (1e-8, 0.5),
+    }
+
+    def __post_init__(self):
+        for key, (lo, hi) in self._RANGES.items():
+            value = getattr(self, key)
+            if not lo <= value <= hi:
+                raise ParameterError(f"option {key}={value} is outside [{lo:g}, {hi:g}]")
+        if self.gas.lower() not in GASES:
+            raise ParameterError(f"unknown gas {self.gas!r}", hint="known: " + ", ".join(GASES))
+
+    @property
+    def gas_model(self) -> Gas:
+        return GASES.get(self.gas.lower(), AIR)
+
+    def replace(self, **changes) -> "SimulationOptions":
+        names = {f.name for f in fields(self)}
+        unknown = sorted(set(changes) - names)
+        if unknown:
+            raise ParameterError(f"unknown option {unknown[0]!r}", hint="known: " + ", ".join(sorted(names)))
+        return replace(self, **changes)

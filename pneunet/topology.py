@@ -1,0 +1,71 @@
+"""Graph checks that make a circuit simulable, with errors naming the culprits."""
+from __future__ import annotations
+
+from .errors import TopologyError
+
+
+def _where(spec) -> str:
+    return spec.where
+
+
+def check_topology(circuit) -> None:
+    """Raise :class:`TopologyError` for circuits the solver cannot handle.
+
+    * no elements, or no defined pressure (no source and no reference node);
+    * two pressure sources (or a source and a reference) on one node;
+    * a node that only touches control ports (nothing sets its pressure);
+    * a group of nodes joined by flow paths with neither a defined pressure nor
+      a volume (their pressures are undetermined);
+    * ``.ic`` on a node that does not exist.
+    """
+    import networkx as nx
+
+    from . import elements
+
+    if not circuit.elements:
+        raise TopologyError("the circuit has no elements")
+    pinned: dict[str, str] = {n: "reference" for n in circuit.nodes if circuit.is_reference(n)}
+    storage: set[str] = set()
+    flow_graph = nx.Graph()
+    touched_by_flow: set[str] = set()
+    for spec in circuit.elements.values():
+        family = elements.family(spec.kind)
+        for port in family.pinned_ports:
+            node = spec.nodes[port]
+            if node in pinned:
+                other = pinned[node]
+                raise TopologyError(
+                    f"node {node!r} has its pressure set twice (by {spec.name} and by {other})",
+                    where=_where(spec), hint="a node takes at most one pressure source; "
+                    "reference nodes 0/gnd/atm are already at ambient pressure")
+            pinned[node] = spec.name
+        storage.update(spec.nodes[p] for p in family.storage_ports)
+        ports = family.flow_ports if family.flow_ports is not None else range(len(spec.nodes))
+        flow_nodes = [spec.nodes[p] for p in ports]
+        touched_by_flow.update(flow_nodes)
+        flow_graph.add_nodes_from(flow_nodes)
+        for a, b in zip(flow_nodes, flow_nodes[1:]):
+            flow_graph.add_edge(a, b)
+    if not pinned:
+        raise TopologyError("no node has a defined pressure",
+                            hint="add a pressure source, or connect a vent to 'atm' (or '0')")
+    floating = [n for n in circuit.nodes if n not in touched_by_flow and n not in pinned]
+    if floating:
+        users = [s.name for s in circuit.elements.values() if floating[0] in s.nodes]
+        raise TopologyError(
+            f"node {floating[0]!r} is floating: it only connects to control ports ({', '.join(users)})",
+            where=f"node {floating[0]}", hint="connect it to a source, a volume or a resistor")
+    for group in nx.connected_components(flow_graph):
+        if not (group & set(pinned)) and not (group & storage):
+            names = ", ".join(sorted(group))
+            raise TopologyError(f"nodes {names} have no path to a defined pressure and no volume",
+                                where=f"node {sorted(group)[0]}",
+                                hint="connect them to a source or reference node, or add a volume")
+    unknown = [n for n in circuit.initial if n not in circuit.nodes]
+    if unknown:
+        import difflib
+
+        close = difflib.get_close_matches(unknown[0], circuit.nodes, n=1)
+        raise TopologyError(f"initial condition for unknown node {unknown[0]!r}",
+                            where=f"node {unknown[0]}",
+                            hint=f"did you mean {close[0]!r}?" if close else None)

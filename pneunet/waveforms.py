@@ -1,0 +1,231 @@
+"""Time functions for sources: constant, step, pulse, piecewise-linear, sine.
+
+Each waveform gives ``value(t)`` (vectorised) in the unit of the source it drives
+(kPa for pressure sources, mg/s for flow sources), its ``breakpoints`` (times at
+which the value or its slope jumps; the transient solver stops there), and
+``netlist()``, the text that writes it back in a netlist.
+SPICE users will recognise PULSE(V1 V2 TD TR TF PW PER), PWL(t1 v1 t2 v2 …) and
+SIN(VO VA FREQ TD THETA PHASE).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .errors import ParameterError
+
+
+class Waveform:
+    """Base class: subclasses implement ``value``, ``breakpoints``, ``netlist``."""
+
+    def value(self, t):
+        raise NotImplementedError
+
+    def breakpoints(self, t_start: float, t_stop: float) -> np.ndarray:
+        """Times in (t_start, t_stop) where the waveform or its slope jumps."""
+        return np.empty(0)
+
+    def jumps(self, t_start: float, t_stop: float) -> np.ndarray:
+        """The subset of breakpoints where the value itself is discontinuous."""
+        return np.empty(0)
+
+    def netlist(self) -> str:
+        raise NotImplementedError
+
+
+def _fmt(x: float) -> str:
+    return f"{x:.10g}"
+
+
+@dataclass(frozen=True)
+class Constant(Waveform):
+    level: float
+
+    def value(self, t):
+        return np.full(np.shape(t), float(self.level)) if np.ndim(t) else float(self.level)
+
+    def netlist(self) -> str:
+        return _fmt(self.level)
+
+
+@dataclass(frozen=True)
+class Step(Waveform):
+    """``initial`` until ``at``, then a linear ramp of duration ``rise`` to ``final``."""
+
+    initial: float
+    final: float
+    at: float = 0.0
+    rise: float = 0.0
+
+    def __post_init__(self):
+        if self.rise < 0:
+            raise ParameterError(f"STEP rise time must be >= 0 s, got {self.rise}")
+
+    def value(self, t):
+        t = np.asarray(t, dtype=float)
+        if self.rise > 0:
+            frac = np.clip((t - self.at) / self.rise, 0.0, 1.0)
+        else:
+            frac = (t >= self.at).astype(float)
+        out = self.initial + (self.final - self.initial) * frac
+        return out if out.ndim else float(out)
+
+    def breakpoints(self, t_start, t_stop):
+        pts = np.array([self.at, self.at + self.rise]) if self.rise > 0 else np.array([self.at])
+        return _inside(pts, t_start, t_stop)
+
+    def jumps(self, t_start, t_stop):
+        return np.empty(0) if self.rise > 0 else _inside(np.array([self.at]), t_start, t_stop)
+
+    def netlist(self) -> str:
+        return f"STEP({_fmt(self.initial)} {_fmt(self.final)} {_fmt(self.at)} {_fmt(self.rise)})"
+
+
+@dataclass(frozen=True)
+class Pulse(Waveform):
+    """SPICE PULSE: ``low`` → ``high`` after ``delay``, ramps ``rise``/``fall``,
+    held ``width``, repeated every ``period`` (0: once)."""
+
+    low: float
+    high: float
+    delay: float = 0.0
+    rise: float = 0.0
+    fall: float = 0.0
+    width: float = np.inf
+    period: float = 0.0
+
+    def __post_init__(self):
+        for key in ("delay", "rise", "fall", "width", "period"):
+            if getattr(self, key) < 0:
+                raise ParameterError(f"PULSE {key} must be >= 0 s, got {getattr(self, key)}")
+        if self.period and self.period < self.rise + self.width + self.fall:
+            raise ParameterError(
+                f"PULSE period {self.period} s is shorter than rise + width + fall "
+                f"({self.rise + self.width + self.fall} s)")
+
+    def _phase(self, t):
+        tau = np.asarray(t, dtype=float) - self.delay
+        if self.period > 0:
+            tau = np.where(tau >= 0, np.mod(tau, self.period), tau)
+        return tau
+
+    def value(self, t):
+        tau = self._phase(t)
+        r, w, f = self.rise, self.width, self.fall
+        with np.errstate(divide="ignore", invalid="ignore"):
+            up = np.where(r > 0, tau / (r if r > 0 else 1.0), 1.0)
+            down = np.where(f > 0, 1.0 - (tau - r - w) / (f if f > 0 else 1.0), 0.0)
+        frac = np.select([tau < 0, tau < r, tau < r + w, tau < r + w + f],
+                         [0.0, up, 1.0, down], 0.0)
+        out = self.low + (self.high - self.low) * frac
+        return out if out.ndim else float(out)
+
+    def _corners(self, t_stop):
+        offsets = np.array([0.0, self.rise, self.rise + self.width,
+                            self.rise + self.width + self.fall])
+        offsets = offsets[np.isfinite(offsets)]
+        if self.period > 0:
+            n = int(np.ceil(max(t_stop - self.delay, 0.0) / self.period)) + 1
+            starts = self.delay + self.period * np.arange(n)
+        else:
+            starts = np.array([self.delay])
+        return starts[:, None] + offsets[None, :]
+
+    def breakpoints(self, t_start, t_stop):
+        return _inside(np.unique(self._corners(t_stop).ravel()), t_start, t_stop)
+
+    def jumps(self, t_start, t_stop):
+        corners = self._corners(t_stop)
+        keep = []
+        if self.rise == 0:
+            keep.append(corners[:, 0])
+        if self.fall == 0 and corners.shape[1] > 2:
+            keep.append(corners[:, 2])
+        if not keep:
+            return np.empty(0)
+        return _inside(np.unique(np.concatenate(keep)), t_start, t_stop)
+
+    def netlist(self) -> str:
+        vals = [self.low, self.high, self.delay, self.rise, self.fall, self.width, self.period]
+        if not np.isfinite(self.width):
+            vals = vals[:5]
+        return "PULSE(" + " ".join(_fmt(v) for v in vals) + ")"
+
+
+@dataclass(frozen=True)
+class PiecewiseLinear(Waveform):
+    """SPICE PWL: linear interpolation between (time, value) corners, held at the ends."""
+
+    times: tuple
+    values: tuple
+
+    def __post_init__(self):
+        t = np.asarray(self.times, dtype=float)
+        if len(t) == 0 or len(t) != len(self.values):
+            raise ParameterError("PWL needs pairs of time and value")
+        if np.any(np.diff(t) < 0):
+            raise ParameterError("PWL times must not decrease",
+                                 hint="write corners in time order: PWL(0 96 1 200 …)")
+
+    def value(self, t):
+        out = np.interp(np.asarray(t, dtype=float), self.times, self.values)
+        return out if np.ndim(out) else float(out)
+
+    def breakpoints(self, t_start, t_stop):
+        return _inside(np.unique(np.asarray(self.times, dtype=float)), t_start, t_stop)
+
+    def jumps(self, t_start, t_stop):
+        t = np.asarray(self.times, dtype=float)
+        repeated = t[1:][np.diff(t) == 0]
+        return _inside(np.unique(repeated), t_start, t_stop)
+
+    def netlist(self) -> str:
+        return "PWL(" + " ".join(f"{_fmt(a)} {_fmt(b)}" for a, b in zip(self.times, self.values)) + ")"
+
+
+@dataclass(frozen=True)
+class Sine(Waveform):
+    """SPICE SIN: offset + amplitude·sin(2π f (t−delay) + phase)·exp(−damping (t−delay)),
+    offset before ``delay``; ``phase`` in degrees."""
+
+    offset: float
+    amplitude: float
+    frequency: float
+    delay: float = 0.0
+    damping: float = 0.0
+    phase: float = 0.0
+
+    def __post_init__(self):
+        if self.frequency < 0:
+            raise ParameterError(f"SIN frequency must be >= 0 Hz, got {self.frequency}")
+
+    def value(self, t):
+        tau = np.asarray(t, dtype=float) - self.delay
+        wave = self.amplitude * np.sin(2 * np.pi * self.frequency * tau + np.radians(self.phase))
+        wave = wave * np.exp(-self.damping * np.maximum(tau, 0.0))
+        pre = self.amplitude * np.sin(np.radians(self.phase))
+        out = self.offset + np.where(tau >= 0, wave, pre)
+        return out if out.ndim else float(out)
+
+    def breakpoints(self, t_start, t_stop):
+        return _inside(np.array([self.delay]), t_start, t_stop) if self.delay > 0 else np.empty(0)
+
+    def netlist(self) -> str:
+        vals = [self.offset, self.amplitude, self.frequency, self.delay, self.damping, self.phase]
+        return "SIN(" + " ".join(_fmt(v) for v in vals) + ")"
+
+
+def _inside(points, t_start, t_stop):
+    points = np.asarray(points, dtype=float)
+    return points[(points > t_start) & (points < t_stop)]
+
+
+def as_waveform(value) -> Waveform:
+    """A number becomes a :class:`Constant`; a waveform is returned as is."""
+    if isinstance(value, Waveform):
+        return value
+    try:
+        return Constant(float(value))
+    except (TypeError, ValueError):
+        raise ParameterError(f"a source value must be a number or a waveform, got {value!r}") from None
