@@ -220,7 +220,7 @@ def as_effect(spec) -> Effect:
     raise ParameterError(f"not an effect: {spec!r}")
 
 
-_LIBRARY = ("pressure_offset", "hysteresis", "internal_drop", "choked", "laminar", "leak")
+_LIBRARY = ("choked", "leak", "laminar", "internal_drop", "hysteresis", "pressure_offset")
 
 
 def _load_library():
