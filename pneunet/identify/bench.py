@@ -194,25 +194,44 @@ def simulate_bench(flow, *, protocol=None, noise_mdot=0.3, noise_rel=0.01, noise
     return out
 
 
-def _solve_outlet(function, true, mdot, regulator, iterations=48):
-    """Outlet pressure p with p = max(p_cmd, floor(ṁ(p))), by vectorised bisection.
+def _solve_outlet(function, true, mdot, regulator, grid=48, iterations=30):
+    """Outlet pressure p with p = max(p_cmd, floor(ṁ(p))) for every point.
 
-    h(p) = floor(ṁ(p)) − p is ≥ 0 at the command when the regulator is overloaded
-    and < 0 at p = p_in (no flow), so a root lies in between.
+    h(p) = floor(ṁ(p)) − p is > 0 at the command when the regulator is overloaded
+    and < 0 at p = p_in (no flow).  Several roots can exist (the valve opens further
+    as p_out rises): a falling control sweep (``sweep`` −1) starts from a closed valve
+    and stays on the lowest root, a rising one (+1) on the highest.  A grid scan
+    brackets the root, bisection refines it.  The model always sees the full frame
+    (history-dependent models need it).
     """
     p_cmd = true["p_out_kPa"].to_numpy(float).copy()
     p_in = true["p_in_kPa"].to_numpy(float)
     need = regulator.floor(mdot) > p_cmd
     if not need.any():
         return p_cmd
-    # the model sees the full frame each time (history-dependent models need it)
+    rising = true["sweep"].to_numpy() > 0
     work = true.copy()
-    lo = p_cmd.copy()
-    hi = np.where(need, np.maximum(p_in, p_cmd), p_cmd)
+    span = np.where(need, np.maximum(p_in - p_cmd, 0.0), 0.0)
+
+    def h_at(p):
+        work["p_out_kPa"] = p
+        return regulator.floor(_evaluate(function, work)) - p
+
+    fractions = np.linspace(0.0, 1.0, grid + 1)
+    positive = np.empty((grid + 1, len(p_cmd)), dtype=bool)
+    for k, t in enumerate(fractions):
+        positive[k] = h_at(p_cmd + t * span) > 0
+    positive[0] = True
+    positive[-1] = False
+    # lowest root: first grid index with h <= 0; highest: after the last h > 0
+    first_neg = np.argmax(~positive, axis=0)
+    last_pos = grid - np.argmax(positive[::-1], axis=0)
+    upper = np.where(rising, last_pos + 1, first_neg)
+    lo = p_cmd + fractions[upper - 1] * span
+    hi = p_cmd + fractions[upper] * span
     for _ in range(iterations):
         mid = 0.5 * (lo + hi)
-        work["p_out_kPa"] = mid
-        h = regulator.floor(_evaluate(function, work)) - mid
-        lo = np.where(need & (h > 0), mid, lo)
-        hi = np.where(need & (h <= 0), mid, hi)
+        up = h_at(np.where(need, mid, p_cmd)) > 0
+        lo = np.where(up, mid, lo)
+        hi = np.where(up, hi, mid)
     return np.where(need, 0.5 * (lo + hi), p_cmd)

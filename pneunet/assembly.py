@@ -1,0 +1,224 @@
+"""Assemble a circuit into the DAE F(t, y, ẏ) = 0 with a sparse analytic Jacobian.
+
+Unknowns y are the pressures of all nodes whose pressure no source or reference
+imposes.  The residual of node i is the sum, over the element ports at that
+node, of the mass flow leaving the node into the element (mg/s):
+
+    F_i = Σ q_port                     (zero: conservation of mass)
+
+A node with a storage port (a volume) is *differential*; the others are
+*algebraic* (index-1 DAE).  Element families are evaluated for all their
+instances at once; their partials are scattered into a CSC matrix through
+index arrays computed once, so each Jacobian costs a few numpy calls.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import elements
+from .elements.base import ElementSpec, FamilyContext
+
+
+@dataclass
+class _FamilyBlock:
+    family: elements.ElementFamily
+    port_node: np.ndarray      # (n, P) global node index of each port
+    free_port: np.ndarray      # (n, P) True where the port's node is an unknown
+    jac_pos: np.ndarray        # CSC data position of each free (i, j) port pair, flattened
+    jac_mask: np.ndarray       # (n, P, P) True for port pairs that are both free
+
+
+class CircuitDAE:
+    """The residual, Jacobian and bookkeeping of one circuit (immutable once built)."""
+
+    def __init__(self, circuit):
+        circuit.validate()
+        self.circuit = circuit
+        self.options = circuit.options
+        context = FamilyContext(circuit.options)
+        specs = list(circuit.elements.values())
+        pinned_by = {}
+        storage_nodes = set()
+        for spec in specs:
+            fam = elements.family(spec.kind)
+            pinned_by.update({spec.nodes[p]: spec.name for p in fam.pinned_ports})
+            storage_nodes.update(spec.nodes[p] for p in fam.storage_ports)
+        references = [n for n in circuit.nodes if circuit.is_reference(n)]
+        fixed = set(pinned_by) | set(references)
+        self.node_names = [n for n in circuit.nodes if n not in fixed]
+        self.fixed_names = [n for n in circuit.nodes if n in fixed]
+        if self.options.dead_volume > 0:
+            specs += [ElementSpec("volume", f"_dead_{n}", (n,),
+                                  {"V": self.options.dead_volume, "n": 1.0, "p0": np.nan})
+                      for n in self.node_names if n not in storage_nodes]
+            storage_nodes.update(self.node_names)
+        self.n = len(self.node_names)
+        index = {name: i for i, name in enumerate(self.node_names + self.fixed_names)}
+        self._index = index
+        self.differential = np.array([n in storage_nodes for n in self.node_names], dtype=bool)
+        self.algebraic_idx = np.flatnonzero(~self.differential)
+        self._reference_idx = np.array([index[n] for n in references], dtype=int)
+
+        grouped: dict[type, list[ElementSpec]] = {}
+        for spec in specs:
+            grouped.setdefault(elements.family(spec.kind), []).append(spec)
+        self.families = [cls(group, context) for cls, group in grouped.items()]
+        self._build_pattern()
+
+    # -- structure ------------------------------------------------------------------
+    def _build_pattern(self) -> None:
+        rows, cols, owners = [], [], []
+        blocks = []
+        for fam in self.families:
+            port_node = np.array([[self._index[n] for n in s.nodes] for s in fam.specs], dtype=int)
+            free = port_node < self.n
+            mask = free[:, :, None] & free[:, None, :]
+            r = np.broadcast_to(port_node[:, :, None], mask.shape)[mask]
+            c = np.broadcast_to(port_node[:, None, :], mask.shape)[mask]
+            rows.append(r)
+            cols.append(c)
+            owners.append(len(r))
+            blocks.append(_FamilyBlock(fam, port_node, free, np.empty(0, int), mask))
+        rows = np.concatenate(rows) if rows else np.empty(0, int)
+        cols = np.concatenate(cols) if cols else np.empty(0, int)
+        # every unknown gets a diagonal entry, so the pattern is structurally regular
+        diag = np.arange(self.n)
+        keys = np.unique(np.concatenate([cols * self.n + rows, diag * self.n + diag]))
+        self._csc_indices = (keys % self.n).astype(np.int32)
+        self._csc_indptr = np.searchsorted(keys // self.n, np.arange(self.n + 1)).astype(np.int32)
+        self.nnz = len(keys)
+        pos = np.searchsorted(keys, cols * self.n + rows)
+        start = 0
+        for block, count in zip(blocks, owners):
+            block.jac_pos = pos[start:start + count]
+            start += count
+        self._blocks = blocks
+
+    def sparsity(self):
+        """The Jacobian's sparsity pattern as a scipy CSC matrix of ones."""
+        from scipy.sparse import csc_matrix
+
+        return csc_matrix((np.ones(self.nnz), self._csc_indices, self._csc_indptr),
+                          shape=(self.n, self.n))
+
+    def csc(self, data):
+        """A CSC matrix with this pattern and the given data."""
+        from scipy.sparse import csc_matrix
+
+        return csc_matrix((data, self._csc_indices, self._csc_indptr), shape=(self.n, self.n))
+
+    # -- evaluation -----------------------------------------------------------------
+    def full_pressures(self, t: float, y: np.ndarray) -> np.ndarray:
+        """Pressures of all nodes (unknowns first, then fixed ones), kPa."""
+        full = np.empty(self.n + len(self.fixed_names))
+        full[:self.n] = y
+        full[self._reference_idx] = self.options.ambient
+        for block in self._blocks:
+            fam = block.family
+            if fam.pinned_ports:
+                nodes = block.port_node[:, list(fam.pinned_ports)]
+                full[nodes] = fam.pinned_pressure(t)
+        return full
+
+    def evaluate(self, t, y, ydot, cj=None, absolute=False):
+        """Residual F(t, y, ẏ); with ``cj`` also the CSC data of ∂F/∂y + cj·∂F/∂ẏ.
+
+        With ``absolute`` the data holds Σ|contribution| instead (the scale of
+        each entry before cancellation, used by the fold indicator).
+        """
+        p = self.full_pressures(t, y)
+        pdot = np.zeros_like(p)
+        pdot[:self.n] = ydot
+        res = np.zeros(self.n)
+        data = np.zeros(self.nnz) if cj is not None else None
+        for block in self._blocks:
+            q, dq_dp, dq_dpdot = block.family.outflows(t, p[block.port_node], pdot[block.port_node])
+            free = block.free_port
+            res += np.bincount(block.port_node[free], weights=q[free], minlength=self.n)[:self.n]
+            if cj is None:
+                continue
+            values = dq_dp if dq_dpdot is None else dq_dp + cj * dq_dpdot
+            values = values[block.jac_mask]
+            data += np.bincount(block.jac_pos, weights=np.abs(values) if absolute else values,
+                                minlength=self.nnz)
+        return res, data
+
+    def jacobian(self, t, y, ydot, cj=0.0):
+        """∂F/∂y + cj·∂F/∂ẏ as a scipy CSC matrix."""
+        return self.csc(self.evaluate(t, y, ydot, cj)[1])
+
+    def capacitance(self, t, y) -> np.ndarray:
+        """∂F/∂ẏ on the diagonal: the capacitance (mg/kPa) at each unknown node."""
+        f0, _ = self.evaluate(t, y, np.zeros(self.n))
+        f1, _ = self.evaluate(t, y, np.ones(self.n))
+        return f1 - f0
+
+    def derivative(self, t, y) -> np.ndarray:
+        """ẏ consistent with y: ẏ_d = −F_d(ẏ=0)/C, ẏ_a = 0 (kPa/s)."""
+        f0, _ = self.evaluate(t, y, np.zeros(self.n))
+        c = self.capacitance(t, y)
+        ydot = np.zeros(self.n)
+        d = self.differential
+        ydot[d] = -f0[d] / c[d]
+        return ydot
+
+    # -- breakpoints and reporting --------------------------------------------------------
+    def jumps(self, t_start, t_stop) -> np.ndarray:
+        times = [b.family.jumps(t_start, t_stop) for b in self._blocks]
+        return np.unique(np.concatenate(times)) if times else np.empty(0)
+
+    def breakpoints(self, t_start, t_stop) -> np.ndarray:
+        times = [b.family.breakpoints(t_start, t_stop) for b in self._blocks]
+        return np.unique(np.concatenate(times)) if times else np.empty(0)
+
+    def initial_state(self, t0: float) -> np.ndarray:
+        """Initial guess: ``.ic`` values, then volumes' p0, then ambient pressure (kPa)."""
+        y = np.full(self.n, self.options.ambient)
+        for block in self._blocks:
+            p0 = block.family.initial_pressure()
+            for k, port in enumerate(block.family.storage_ports):
+                nodes = block.port_node[:, port]
+                ok = (nodes < self.n) & ~np.isnan(p0)
+                y[nodes[ok]] = p0[ok]
+        for name, value in self.circuit.initial.items():
+            if name in self._index and self._index[name] < self.n:
+                y[self._index[name]] = value
+        return y
+
+    def node_outflow(self, t, y) -> np.ndarray:
+        """Net mass flow leaving every node (unknown and fixed) into elements, mg/s.
+
+        At a source's node this is the flow the source delivers.
+        """
+        p = self.full_pressures(t, y)
+        out = np.zeros(len(p))
+        pdot = np.zeros_like(p)
+        for block in self._blocks:
+            q, _, _ = block.family.outflows(t, p[block.port_node], pdot[block.port_node])
+            out += np.bincount(block.port_node.ravel(), weights=q.ravel(), minlength=len(p))
+        return out
+
+    def element_signals(self, t: np.ndarray, full_p: np.ndarray) -> dict[str, tuple[str, np.ndarray]]:
+        """Per-element signals over time: {'mdot_Rout': ('mg/s', array)}."""
+        out = {}
+        for block in self._blocks:
+            fam = block.family
+            for suffix, (unit, values) in fam.signals(t, full_p[:, block.port_node]).items():
+                for k, name in enumerate(fam.names):
+                    if not name.startswith("_dead_"):
+                        out[f"{suffix}_{name}"] = (unit, values[:, k])
+        return out
+
+    def pinned_sources(self) -> dict[str, str]:
+        """{source element name: node} for the elements that pin a pressure."""
+        out = {}
+        for block in self._blocks:
+            for k, name in enumerate(block.family.names):
+                for port in block.family.pinned_ports:
+                    out[name] = block.family.specs[k].nodes[port]
+        return out
+
+    def node_index(self, name: str) -> int:
+        return self._index[name]

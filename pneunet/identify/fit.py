@@ -1,0 +1,500 @@
+"""Two-stage identification of the six valve parameters (paper sec. 4.1, eqs. 20–24).
+
+Stage 1 — open/closed boundary.  Points are labelled open when ṁ > ṁ_min and a
+soft-margin linear SVM (scikit-learn ``SVC(kernel="linear")``, the paper's C) finds
+the plane w·x + b = 0 in x = (p_in, p_out, p_ctrl); eq. 22 turns it into
+a_in = −w_in/w_ctrl, a_out = −w_out/w_ctrl, p_close = b/w_ctrl.
+
+Stage 2 — on the points with Δp > p_close, ``scipy.optimize.least_squares`` fits
+1/R = ṁ/√(p_in² − p_out²) against Δp with eq. 24 (free: R_f, p_trans, e).
+
+Threshold correction (default on, ``correct_threshold=False`` is the paper's
+procedure exactly).  A point is labelled open only once its flow exceeds ṁ_min,
+i.e. at Δp = p_close + δ_i with δ_i = (p_trans − p_close)·(m/√(1−m²))^(1/e),
+m = ṁ_min·R_f/√(p_in² − p_out²) — 2 to 5 kPa for the paper's axi valve.  The
+SVM therefore finds p_close too high by a few kPa and slightly tilted areas.  The
+correction re-runs stage 1 with p_ctrl shifted by δ_i (from the stage-2 estimates),
+which makes the labelled boundary exactly the plane Δp = p_close, then stage 2.
+
+Uncertainties.  Stage 1: Poisson bootstrap of the SVM (``n_boot`` replicates,
+weights on the points near the boundary; points beyond the margin never enter the
+SVM solution, so this equals a full bootstrap), giving the covariance of
+(a_in, a_out, p_close).  Stage 2: heteroscedasticity-robust (sandwich, HC1)
+covariance from the least-squares Jacobian, plus the stage-1 uncertainty carried
+through by the delta method (stage 2 is re-solved with each stage-1 parameter
+perturbed).  95 % intervals are value ± 1.96 standard errors.
+"""
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from ..errors import DataError, ParameterError
+from ..valve_params import VALVE_PARAMETERS, ValveParams
+from .data import PRESSURES, Measurements, as_frame
+
+NAMES = ("Rf", "pclose", "ptrans", "e", "ain", "aout")
+STAGE1 = ("ain", "aout", "pclose")
+STAGE2 = ("Rf", "ptrans", "e")
+Z95 = 1.959963984540054
+#: automatic ṁ_min = centre + AUTO_SIGMAS × noise of the closed points
+AUTO_SIGMAS = 5.0
+
+
+# --------------------------------------------------------------------------- helpers
+def inverse_resistance(frame) -> np.ndarray:
+    """Measured 1/R = ṁ/√(p_in² − p_out²), mg/(s·kPa) (eq. 23)."""
+    p_in = frame["p_in_kPa"].to_numpy(float)
+    p_out = frame["p_out_kPa"].to_numpy(float)
+    s = np.sqrt(np.maximum(p_in * p_in - p_out * p_out, 0.0))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(s > 0, frame["mdot_mg_s"].to_numpy(float) / s, np.nan)
+
+
+def delta_p(frame, ain, aout) -> np.ndarray:
+    """Equivalent membrane pressure difference Δp of every point (eq. 13/25), kPa."""
+    from ..laws import valve_delta_p
+
+    return valve_delta_p(frame["p_in_kPa"].to_numpy(float), frame["p_out_kPa"].to_numpy(float),
+                         frame["p_ctrl_kPa"].to_numpy(float), ain, aout)
+
+
+def auto_mdot_min(mdot, *, sigmas=AUTO_SIGMAS):
+    """ṁ_min from the noise of the closed points.
+
+    Starts from the 10 % of readings nearest zero (any sensible protocol has that
+    many closed points), then iterates: centre = median, noise σ = 1.4826·MAD of the
+    points within 4σ of the centre.  Returns ``(mdot_min, centre, sigma)`` with
+    mdot_min = centre + ``sigmas``·σ (floor: 1e-4 of the largest reading).
+    """
+    mdot = np.asarray(mdot, dtype=float)
+    mdot = mdot[np.isfinite(mdot)]
+    order = np.argsort(np.abs(mdot))
+    sample = mdot[order[:max(10, len(mdot) // 10)]]
+    centre = float(np.median(sample))
+    sigma = float(1.4826 * np.median(np.abs(sample - centre)))
+    for _ in range(20):
+        if sigma <= 0:
+            break
+        sample = mdot[np.abs(mdot - centre) <= 4.0 * sigma]
+        new_centre = float(np.median(sample))
+        new_sigma = float(1.4826 * np.median(np.abs(sample - new_centre)))
+        if abs(new_sigma - sigma) <= 1e-3 * sigma and abs(new_centre - centre) <= 1e-3 * sigma:
+            centre, sigma = new_centre, new_sigma
+            break
+        centre, sigma = new_centre, new_sigma
+    floor = 1e-4 * float(np.max(np.abs(mdot))) if len(mdot) else 1e-6
+    return max(centre + sigmas * sigma, floor), centre, sigma
+
+
+# --------------------------------------------------------------------------- stage 1
+def _svc(X, y, C, sample_weight=None):
+    from sklearn.svm import SVC
+
+    mu = X.mean(axis=0)
+    model = SVC(kernel="linear", C=C, tol=1e-3, cache_size=200)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model.fit(X - mu, y, sample_weight=sample_weight)
+    w = model.coef_[0].astype(float)
+    return w, float(model.intercept_[0] - w @ mu)
+
+
+def separate(X, y, C=0.1, *, window=60.0):
+    """Soft-margin linear SVM on pressures X (n×3, kPa) and labels y (±1): (w, b).
+
+    Solves the same problem as an SVM on all points, faster: a first plane from a
+    cheap fit selects the points within ``window`` kPa of it (in p_ctrl), the SVM is
+    solved on those, and points outside that violate the margin (y·f < 1) are added
+    until there are none — points beyond the margin have zero dual weight, so the
+    result is the full-data solution.
+    """
+    y = np.asarray(y)
+    if (y > 0).all() or (y < 0).all():
+        kind = "open" if (y > 0).all() else "closed"
+        raise DataError(f"all {len(y)} points are labelled {kind}: there is no open/closed "
+                        f"boundary to identify",
+                        hint="check mdot_min and the flow units, and that the protocol lowers "
+                             "p_ctrl far enough to open the valve and raises it to close it")
+    n = len(y)
+    if n <= 800:
+        return _svc(X, y, C)
+    rng = np.random.default_rng(0)
+    # cheap first plane: SVM on a random subsample
+    pick = rng.choice(n, size=600, replace=False)
+    if len(np.unique(y[pick])) < 2:
+        pick = np.arange(n)
+    w, b = _svc(X[pick], y[pick], C)
+    for _ in range(10):
+        f = X @ w + b
+        dist = np.abs(f / w[2]) if w[2] != 0 else np.abs(f)
+        active = (dist <= window) | (y * f < 1.0)
+        if len(np.unique(y[active])) < 2:
+            active = np.ones(n, dtype=bool)
+        w, b = _svc(X[active], y[active], C)
+        f = X @ w + b
+        violators = (~active) & (y * f < 1.0 - 1e-6)
+        if not violators.any():
+            return w, b
+        window *= 2.0
+    return _svc(X, y, C)
+
+
+def plane_to_params(w, b):
+    """eq. 22: (a_in, a_out, p_close) from the plane w·x + b = 0."""
+    if not w[2] < 0:
+        raise DataError("the separating plane does not close the valve as p_ctrl rises "
+                        f"(w_ctrl = {w[2]:.3g} ≥ 0)",
+                        hint="the open/closed labels do not follow the control pressure; check "
+                             "column order (p_in, p_out, p_ctrl) and mdot_min")
+    return -w[0] / w[2], -w[1] / w[2], b / w[2]
+
+
+# --------------------------------------------------------------------------- stage 2
+def _conductance(x, Rf, pclose, ptrans, e):
+    from ..laws import valve_conductance
+
+    return valve_conductance(x, Rf, pclose, ptrans, e)[0]
+
+
+def _stage2(x, y, pclose, start=None):
+    """Least squares of 1/R on Δp (eq. 24): returns (Rf, ptrans, e, result)."""
+    from scipy.optimize import least_squares
+
+    if start is None:
+        top = float(np.quantile(y, 0.99))
+        Rf0 = 1.0 / top if top > 0 else 1.0
+        level = 0.7071 * top
+        above = x[y >= level]
+        d0 = max(float(np.min(above)) - pclose, 1.0) if len(above) else 50.0
+        start = (Rf0, pclose + d0, 2.0)
+    Rf0, pt0, e0 = start
+    theta0 = np.array([math.log(Rf0), math.log(max(pt0 - pclose, 1e-3)), min(max(e0, 0.2), 9.0)])
+
+    def residual(theta):
+        Rf, d, e = math.exp(theta[0]), math.exp(theta[1]), theta[2]
+        return _conductance(x, Rf, pclose, pclose + d, e) - y
+
+    result = least_squares(residual, theta0, bounds=([-20, -10, 0.1], [20, 20, 10.0]),
+                           x_scale="jac", method="trf")
+    Rf, d, e = math.exp(result.x[0]), math.exp(result.x[1]), float(result.x[2])
+    return Rf, pclose + d, e, result
+
+
+def _stage2_cov(x, y, Rf, pclose, ptrans, e):
+    """HC1 sandwich covariance of (Rf, ptrans, e) at fixed stage-1 parameters."""
+    p = np.array([Rf, ptrans, e])
+    base = _conductance(x, *_unpack(p, pclose))
+    J = np.empty((len(x), 3))
+    for k in range(3):
+        h = 1e-6 * max(abs(p[k]), 1e-3)
+        q = p.copy()
+        q[k] += h
+        J[:, k] = (_conductance(x, *_unpack(q, pclose)) - base) / h
+    r = base - y
+    n = len(x)
+    bread = np.linalg.pinv(J.T @ J)
+    meat = J.T @ (J * (r * r)[:, None])
+    return bread @ meat @ bread * n / max(n - 3, 1)
+
+
+def _unpack(p, pclose):
+    return p[0], pclose, p[1], p[2]
+
+
+# --------------------------------------------------------------------------- result
+@dataclass
+class ValveFit:
+    """Result of :func:`fit_valve`.
+
+    ``params`` (ValveParams), ``stderr`` and ``ci95`` by parameter name, ``metrics``
+    (rmse, rmse_open, rmse_inv_r, misclassified, n, n_open, ...), per point
+    ``open`` (labels ṁ > ṁ_min), ``misclassified`` and ``fitted`` (stage-2 points),
+    and ``frame`` (the data used).
+    """
+
+    params: ValveParams
+    stderr: dict
+    ci95: dict
+    metrics: dict
+    open: np.ndarray
+    misclassified: np.ndarray
+    fitted: np.ndarray
+    frame: pd.DataFrame
+    mdot_min: float
+    C: float
+    covariance: pd.DataFrame
+    settings: dict = field(default_factory=dict)
+    measurements: Measurements | None = None
+    plane: tuple = ()
+
+    # ---- predictions
+    def predict(self, frame) -> np.ndarray:
+        """Model flow (mg/s) at the pressures of ``frame`` (canonical columns)."""
+        from ..laws import valve_flow
+
+        return valve_flow(np.asarray(frame["p_in_kPa"], float),
+                          np.asarray(frame["p_out_kPa"], float),
+                          np.asarray(frame["p_ctrl_kPa"], float), **self.params.as_dict())
+
+    def delta_p(self, frame=None) -> np.ndarray:
+        return delta_p(self.frame if frame is None else frame, self.params.ain,
+                       self.params.aout)
+
+    def inverse_resistance(self, frame=None) -> np.ndarray:
+        return inverse_resistance(self.frame if frame is None else frame)
+
+    # ---- output
+    def model_card(self, name: str = "VFIT") -> str:
+        return self.params.model_card(name)
+
+    def to_json(self) -> dict:
+        out = {"params": {k: {"value": float(getattr(self.params, k)),
+                              "stderr": float(self.stderr[k]),
+                              "ci95": [float(v) for v in self.ci95[k]],
+                              "unit": VALVE_PARAMETERS[k][0]} for k in NAMES},
+               "metrics": {k: (int(v) if isinstance(v, (int, np.integer)) else float(v))
+                           for k, v in self.metrics.items()},
+               "settings": {k: v for k, v in self.settings.items()
+                            if isinstance(v, (int, float, str, bool)) or v is None}}
+        return out
+
+    def report(self, name: str | None = None) -> str:
+        m = self.metrics
+        s = self.settings
+        lines = ["[[Valve fit]]" + (f" {name}" if name else "")]
+        lines.append(f"    method           = two-stage (linear SVM C={self.C:g} kPa^-2, "
+                     f"then least squares of 1/R on Δp)")
+        lines.append(f"    mdot_min         = {self.mdot_min:.4g} mg/s"
+                     + (f" (auto: closed-point noise {s.get('noise_sigma', 0):.3g} mg/s around "
+                        f"{s.get('noise_centre', 0):.3g})" if s.get("mdot_min_mode") == "auto"
+                        else ""))
+        lines.append(f"    threshold corr.  = {'on' if s.get('correct_threshold') else 'off (paper)'}")
+        lines.append("[[Fit statistics]]")
+        lines.append(f"    data points      = {m['n']}   (open {m['n_open']}, stage-2 points "
+                     f"{m['n_fit']})")
+        lines.append(f"    misclassified    = {m['misclassified']} ({100 * m['misclassified_frac']:.2f} %), "
+                     f"largest distance from the plane {m['misclassified_max_kPa']:.3g} kPa (in p_ctrl)")
+        lines.append(f"    RMSE flow        = {m['rmse']:.4g} mg/s all, {m['rmse_open']:.4g} mg/s open "
+                     f"(max flow {m['max_flow']:.4g} mg/s)")
+        lines.append(f"    RMSE 1/R         = {m['rmse_inv_r']:.4g} mg/(s·kPa) "
+                     f"(max 1/R {m['max_inv_r']:.4g})")
+        lines.append("[[Variables]]")
+        for k in NAMES:
+            v, e = getattr(self.params, k), self.stderr[k]
+            lo, hi = self.ci95[k]
+            rel = f"({100 * e / abs(v):.2f}%)" if v else ""
+            unit = VALVE_PARAMETERS[k][0]
+            stage = "stage 1, bootstrap" if k in STAGE1 else "stage 2, sandwich+delta"
+            lines.append(f"    {k:<7}= {v:<11.5g} +/- {e:<10.3g} {rel:<9} 95% CI "
+                         f"[{lo:.5g}, {hi:.5g}] {unit:<9} {stage}")
+        corr = self.correlations()
+        pairs = [(a, b, corr.loc[a, b]) for i, a in enumerate(NAMES) for b in NAMES[i + 1:]
+                 if abs(corr.loc[a, b]) > 0.5]
+        if pairs:
+            lines.append("[[Correlations]] (|r| > 0.5)")
+            for a, b, r in sorted(pairs, key=lambda t: -abs(t[2])):
+                lines.append(f"    C({a}, {b}) = {r:+.3f}")
+        if self.measurements is not None and len(self.measurements.excluded):
+            lines.append("[[Data]]")
+            lines.append("    " + self.measurements.summary().replace("\n", "\n    "))
+        return "\n".join(lines)
+
+    def correlations(self) -> pd.DataFrame:
+        sd = np.sqrt(np.clip(np.diag(self.covariance.to_numpy()), 1e-300, None))
+        return self.covariance / np.outer(sd, sd)
+
+
+# --------------------------------------------------------------------------- driver
+def _labels(mdot, mdot_min):
+    return np.where(mdot > mdot_min, 1, -1)
+
+
+def fit_valve(data, *, mdot_min=1.0, C=0.1, correct_threshold=True, n_boot=100, seed=0,
+              **load_options) -> ValveFit:
+    """Identify the six parameters from static measurements (two stages, eqs. 20–24).
+
+    Parameters
+    ----------
+    data : Measurements, DataFrame or path
+        Canonical columns; DataFrames and paths go through :func:`load_measurements`
+        (``load_options`` are passed on).
+    mdot_min : float or "auto"
+        Flow threshold (mg/s) between closed and open (paper: 1); ``"auto"`` takes
+        it from the noise of the closed points (:func:`auto_mdot_min`).
+    C : float
+        SVM slack weight in kPa⁻² (paper: 0.1).
+    correct_threshold : bool
+        Correct stage 1 for the flow threshold (module docstring); False is the
+        paper's procedure.
+    n_boot : int
+        Bootstrap replicates for the stage-1 uncertainties (0: none).
+    """
+    frame, measurements = as_frame(data, **load_options)
+    missing = [c for c in PRESSURES + ("mdot_mg_s",) if c not in frame]
+    if missing:
+        raise DataError(f"data lacks column(s) {missing}")
+    if len(frame) < 10:
+        raise DataError(f"only {len(frame)} points: too few to identify six parameters")
+    if C <= 0:
+        raise ParameterError(f"C must be > 0, got {C}")
+    mdot = frame["mdot_mg_s"].to_numpy(float)
+    X = frame[list(PRESSURES)].to_numpy(float)
+    settings = {"C": C, "correct_threshold": bool(correct_threshold), "n_boot": n_boot,
+                "seed": seed}
+    if isinstance(mdot_min, str):
+        if mdot_min != "auto":
+            raise ParameterError(f"mdot_min must be a number or 'auto', got {mdot_min!r}")
+        mdot_min, centre, sigma = auto_mdot_min(mdot)
+        settings.update(mdot_min_mode="auto", noise_centre=centre, noise_sigma=sigma)
+    else:
+        mdot_min = float(mdot_min)
+        settings["mdot_min_mode"] = "given"
+    settings["mdot_min"] = mdot_min
+    y = _labels(mdot, mdot_min)
+    inv_r = inverse_resistance(frame)
+    s_root = np.sqrt(np.maximum(X[:, 0] ** 2 - X[:, 1] ** 2, 0.0))
+
+    # stage 1 (paper), stage 2
+    shift = np.zeros(len(frame))
+    usable = np.ones(len(frame), dtype=bool)
+    w, b = separate(X, y, C)
+    ain, aout, pclose = plane_to_params(w, b)
+    Rf, ptrans, e, _ = _stage2_fit(X, inv_r, ain, aout, pclose)
+    iterations = 3 if correct_threshold else 0
+    for _ in range(iterations):
+        shift, usable = _threshold_shift(s_root, mdot_min, Rf, pclose, ptrans, e)
+        Xs = X.copy()
+        Xs[:, 2] += shift
+        w, b = separate(Xs[usable], y[usable], C)
+        ain_new, aout_new, pclose_new = plane_to_params(w, b)
+        Rf, ptrans, e, _ = _stage2_fit(X, inv_r, ain_new, aout_new, pclose_new,
+                                       start=(Rf, ptrans, e))
+        converged = (abs(pclose_new - pclose) < 1e-3 and abs(ain_new - ain) < 1e-5
+                     and abs(aout_new - aout) < 1e-5)
+        ain, aout, pclose = ain_new, aout_new, pclose_new
+        if converged:
+            break
+    Xs = X.copy()
+    Xs[:, 2] += shift
+    try:
+        params = ValveParams(Rf=Rf, pclose=pclose, ptrans=ptrans, e=e, ain=ain, aout=aout)
+    except ParameterError as exc:
+        raise DataError(f"the identified parameters are not a valid valve: {exc.message}",
+                        hint="check units (absolute kPa, mg/s) and that the data spans closed "
+                             "and fully open states") from None
+
+    # uncertainties
+    cov1 = _bootstrap_stage1(Xs[usable], y[usable], C, w, b, n_boot, seed)
+    dp = delta_p(frame, ain, aout)
+    fitted = (dp > pclose) & np.isfinite(inv_r)
+    cov2 = _stage2_cov(dp[fitted], inv_r[fitted], Rf, pclose, ptrans, e)
+    G = _stage2_sensitivity(X, inv_r, (ain, aout, pclose), (Rf, ptrans, e))
+    cov = np.zeros((6, 6))
+    order1 = [NAMES.index(k) for k in STAGE1]
+    order2 = [NAMES.index(k) for k in STAGE2]
+    cov[np.ix_(order1, order1)] = cov1
+    cov[np.ix_(order2, order2)] = cov2 + G @ cov1 @ G.T
+    cov[np.ix_(order2, order1)] = G @ cov1
+    cov[np.ix_(order1, order2)] = (G @ cov1).T
+    covariance = pd.DataFrame(cov, index=list(NAMES), columns=list(NAMES))
+    stderr = {k: float(math.sqrt(max(cov[i, i], 0.0))) for i, k in enumerate(NAMES)}
+    ci95 = {k: (getattr(params, k) - Z95 * stderr[k], getattr(params, k) + Z95 * stderr[k])
+            for k in NAMES}
+
+    # figures of merit
+    f = Xs @ w + b
+    misclassified = np.zeros(len(frame), dtype=bool)
+    misclassified[usable] = (np.sign(f[usable]) != y[usable])
+    from ..laws import valve_flow
+
+    pred = valve_flow(X[:, 0], X[:, 1], X[:, 2], **params.as_dict())
+    is_open = y > 0
+    pred_inv_r = _conductance(dp, Rf, pclose, ptrans, e)
+    metrics = {
+        "n": int(len(frame)),
+        "n_open": int(is_open.sum()),
+        "n_fit": int(fitted.sum()),
+        "misclassified": int(misclassified.sum()),
+        "misclassified_frac": float(misclassified.mean()),
+        "misclassified_max_kPa": float(np.max(np.abs(f[misclassified] / w[2])))
+        if misclassified.any() else 0.0,
+        "rmse": float(np.sqrt(np.mean((pred - mdot) ** 2))),
+        "rmse_open": float(np.sqrt(np.mean((pred[is_open] - mdot[is_open]) ** 2)))
+        if is_open.any() else float("nan"),
+        "rmse_inv_r": float(np.sqrt(np.mean((pred_inv_r[fitted] - inv_r[fitted]) ** 2))),
+        "max_flow": float(np.max(mdot)),
+        "max_inv_r": float(np.nanmax(inv_r)),
+    }
+    return ValveFit(params=params, stderr=stderr, ci95=ci95, metrics=metrics, open=is_open,
+                    misclassified=misclassified, fitted=fitted, frame=frame,
+                    mdot_min=mdot_min, C=C, covariance=covariance, settings=settings,
+                    measurements=measurements, plane=(w, b))
+
+
+def _stage2_fit(X, inv_r, ain, aout, pclose, start=None):
+    from ..laws import valve_delta_p
+
+    dp = valve_delta_p(X[:, 0], X[:, 1], X[:, 2], ain, aout)
+    use = (dp > pclose) & np.isfinite(inv_r)
+    if use.sum() < 5:
+        raise DataError(f"only {int(use.sum())} points with an open valve (Δp > p_close): "
+                        "too few for stage 2",
+                        hint="the protocol must lower p_ctrl far enough to open the valve fully")
+    return _stage2(dp[use], inv_r[use], pclose, start)
+
+
+def _threshold_shift(s_root, mdot_min, Rf, pclose, ptrans, e):
+    """δ_i: how far above p_close point i must be for its flow to exceed ṁ_min."""
+    m = np.where(s_root > 0, mdot_min * Rf / np.where(s_root > 0, s_root, 1.0), np.inf)
+    usable = m < 0.999
+    if mdot_min <= 0:
+        return np.zeros_like(s_root), usable | True
+    ms = np.where(usable, m, 0.5)
+    u = (ms / np.sqrt(1.0 - ms * ms)) ** (1.0 / e)
+    return np.where(usable, (ptrans - pclose) * u, 0.0), usable
+
+
+def _bootstrap_stage1(X, y, C, w, b, n_boot, seed, window_margin=3.0):
+    """Covariance of (a_in, a_out, p_close) by a Poisson bootstrap of the SVM."""
+    if n_boot <= 1:
+        return np.zeros((3, 3))
+    f = X @ w + b
+    near = np.abs(f) <= window_margin
+    near |= y * f < 1.0
+    Xn, yn = X[near], y[near]
+    if len(np.unique(yn)) < 2:
+        return np.zeros((3, 3))
+    rng = np.random.default_rng(seed)
+    samples = []
+    for _ in range(n_boot):
+        weights = rng.poisson(1.0, size=len(yn)).astype(float)
+        keep = weights > 0
+        if len(np.unique(yn[keep])) < 2:
+            continue
+        wb, bb = _svc(Xn[keep], yn[keep], C, sample_weight=weights[keep])
+        if wb[2] >= 0:
+            continue
+        samples.append(plane_to_params(wb, bb))
+    if len(samples) < 2:
+        return np.zeros((3, 3))
+    return np.cov(np.asarray(samples).T)
+
+
+def _stage2_sensitivity(X, inv_r, stage1, stage2):
+    """G = ∂(Rf, ptrans, e)/∂(ain, aout, pclose) by re-solving stage 2 (central diff.)."""
+    steps = (1e-3, 1e-3, 0.2)
+    G = np.zeros((3, 3))
+    for k, h in enumerate(steps):
+        values = []
+        for sign in (+1, -1):
+            p1 = list(stage1)
+            p1[k] += sign * h
+            Rf, ptrans, e, _ = _stage2_fit(X, inv_r, *p1, start=stage2)
+            values.append(np.array([Rf, ptrans, e]))
+        G[:, k] = (values[0] - values[1]) / (2 * h)
+    return G

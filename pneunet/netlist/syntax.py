@@ -1,0 +1,216 @@
+"""Netlist text -> statements with source spans (lark does the lexing and parsing).
+
+Comments are blanked out (replaced by spaces) before parsing so that every token
+keeps its file line and column.  A statement is a list of items:
+
+* :class:`Word` — a bare word (name, node, number with unit, ``{expr}``...);
+* :class:`Str` — a quoted string (file names);
+* :class:`Call` — ``NAME(args)`` (waveforms, ``VALVE(...)``, ``p(node)``);
+* :class:`Group` — ``(args)`` without a name;
+* :class:`Pair` — ``key=value``.
+"""
+from __future__ import annotations
+
+import functools
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ..errors import NetlistError, SourceSpan
+
+
+# -- items ---------------------------------------------------------------------------
+@dataclass
+class Item:
+    span: SourceSpan
+
+
+@dataclass
+class Word(Item):
+    text: str
+
+    def __str__(self):
+        return self.text
+
+
+@dataclass
+class Str(Item):
+    text: str
+
+    def __str__(self):
+        return f'"{self.text}"'
+
+
+@dataclass
+class Call(Item):
+    name: str
+    args: list
+
+    def __str__(self):
+        return f"{self.name}({' '.join(str(a) for a in self.args)})"
+
+
+@dataclass
+class Group(Item):
+    args: list
+
+    def __str__(self):
+        return f"({' '.join(str(a) for a in self.args)})"
+
+
+@dataclass
+class Pair(Item):
+    key: Item
+    value: Item
+
+    def __str__(self):
+        return f"{self.key}={self.value}"
+
+
+@dataclass
+class Statement:
+    items: list
+    span: SourceSpan
+    #: file the statement comes from (for .include relative paths)
+    path: Path | None = None
+
+    @property
+    def head(self) -> str:
+        first = self.items[0]
+        return first.text if isinstance(first, Word) else ""
+
+    @property
+    def is_directive(self) -> bool:
+        return self.head.startswith(".")
+
+    @property
+    def keyword(self) -> str:
+        return self.head.lower()
+
+
+@dataclass
+class SourceText:
+    """A parsed file: its statements and its title (first '*' comment line)."""
+
+    name: str
+    lines: list
+    statements: list = field(default_factory=list)
+    title: str = ""
+
+
+# -- lark -----------------------------------------------------------------------------
+@functools.lru_cache(maxsize=1)
+def lark_parser():
+    """The shared LALR parser (netlist and expression start symbols)."""
+    from importlib.resources import files
+
+    from lark import Lark
+
+    grammar = files("pneunet.netlist").joinpath("grammar.lark").read_text(encoding="utf-8")
+    return Lark(grammar, parser="lalr", start=["netlist", "expr"], propagate_positions=True,
+                maybe_placeholders=False)
+
+
+_COMMENT_LINE = re.compile(r"^[ \t]*\*")
+
+
+def blank_comments(text: str) -> tuple[str, str]:
+    """Blank '*' comment lines and ';' comments; return (text, title)."""
+    out, title = [], ""
+    for line in text.split("\n"):
+        if _COMMENT_LINE.match(line):
+            if not title and not out and line.strip("* \t\r"):
+                title = line.strip().lstrip("*").strip()
+            out.append(" " * len(line.rstrip("\r")))
+            continue
+        cut = line.find(";")
+        if cut >= 0:
+            line = line[:cut] + " " * (len(line) - cut)
+        out.append(line)
+    return "\n".join(out), title
+
+
+def parse_text(text: str, name: str = "<netlist>", path: Path | None = None) -> SourceText:
+    """Parse netlist text into statements (no meaning attached yet)."""
+    from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken
+
+    text = text.replace("\t", " ")
+    lines = text.split("\n")
+    clean, title = blank_comments(text)
+    first = clean.lstrip(" \n\r")
+    if first.startswith("+"):
+        line = clean[:len(clean) - len(first)].count("\n") + 1
+        raise NetlistError("continuation line '+' without a line to continue",
+                           span=_span(name, lines, line, lines[line - 1].find("+") + 1))
+    if not clean.endswith("\n"):
+        clean += "\n"
+    try:
+        tree = lark_parser().parse(clean, start="netlist")
+    except UnexpectedInput as err:
+        line, column = err.line, err.column
+        if line < 1:  # error at end of input
+            line = len(lines)
+            column = len(lines[-1]) + 1
+        if isinstance(err, UnexpectedToken):
+            tok = err.token
+            if tok.type in ("_NL", "$END"):
+                msg = "unexpected end of line"
+                hint = "a '(' or '{' is not closed, or a key= has no value"
+                column = min(column, len(lines[line - 1]) + 1) if line <= len(lines) else column
+            elif tok.type == "EQUAL":
+                msg, hint = "unexpected '='", "write key=value without spaces before a value, " \
+                                              "and only one '=' per parameter"
+            elif tok.type == "RPAR":
+                msg, hint = "unexpected ')'", "parentheses are not balanced"
+            else:
+                msg, hint = f"unexpected {tok.value!r}", None
+        elif isinstance(err, UnexpectedCharacters):
+            ch = lines[line - 1][column - 1] if line <= len(lines) and column <= len(lines[line - 1]) else "?"
+            msg = f"unexpected character {ch!r}"
+            hint = "a '{' is not closed on this line" if ch == "{" else \
+                "a '}' has no matching '{'" if ch == "}" else None
+        else:  # pragma: no cover
+            msg, hint = str(err), None
+        raise NetlistError(msg, span=_span(name, lines, line, column), hint=hint) from None
+    src = SourceText(name, lines, title=title)
+    for st in tree.children:
+        items = [_item(child, name, lines) for child in st.children]
+        src.statements.append(Statement(items, items[0].span, path))
+    return src
+
+
+def _span(name, lines, line, column) -> SourceSpan:
+    text = lines[line - 1] if 1 <= line <= len(lines) else ""
+    return SourceSpan(name, line, max(column, 1), text)
+
+
+def _item(node, name, lines) -> Item:
+    from lark import Token
+
+    if isinstance(node, Token):  # pragma: no cover (rules wrap tokens)
+        return Word(_span(name, lines, node.line, node.column), str(node))
+    kind = node.data
+    span = _span(name, lines, node.meta.line, node.meta.column)
+    if kind == "word":
+        return Word(span, str(node.children[0]))
+    if kind == "string":
+        return Str(span, str(node.children[0])[1:-1])
+    if kind == "pair":
+        return Pair(span, _item(node.children[0], name, lines), _item(node.children[1], name, lines))
+    if kind in ("call", "group"):
+        children = list(node.children)
+        head = str(children.pop(0)) if kind == "call" else None
+        args = []
+        for ch in children:
+            if getattr(ch, "data", None) == "args":
+                args = [_item(a, name, lines) for a in ch.children]
+        return Call(span, head, args) if kind == "call" else Group(span, args)
+    raise AssertionError(kind)  # pragma: no cover
+
+
+def read_source(path: Path) -> SourceText:
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise NetlistError(f"cannot read {path}: {exc.strerror or exc}") from None
+    return parse_text(text, str(path), path)

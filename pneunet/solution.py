@@ -1,0 +1,148 @@
+"""Results of analyses: immutable, labelled signals with units.
+
+Signal names follow the measured-data format (docs/DATA-FORMAT.md): ``p_<node>``
+for node pressures (kPa absolute), ``mdot_<element>`` for element flows (mg/s),
+plus element-specific signals (``dp_<valve>``, ``opening_<valve>``).  Table
+columns append the unit: ``p_tank_kPa``, ``mdot_Rout_mg_s``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from types import MappingProxyType
+from typing import Any, Mapping
+
+import numpy as np
+
+from .errors import PneunetError
+
+
+def column_name(signal: str, unit: str) -> str:
+    """Table column of a signal: its name and unit (``mg/s`` → ``mg_s``)."""
+    if unit in ("", "1"):
+        return signal
+    return f"{signal}_{unit.replace('/', '_').replace('*', '').replace('·', '')}"
+
+
+def _freeze(mapping):
+    frozen = {}
+    for k, v in mapping.items():
+        arr = np.array(v, dtype=float)
+        arr.setflags(write=False)
+        frozen[k] = arr
+    return MappingProxyType(frozen)
+
+
+@dataclass(frozen=True)
+class Solution:
+    """A transient result: time points and named signals (read-only arrays).
+
+    ``jumps`` lists the times of explicit jumps between solution branches
+    (relaxation oscillations); the state before and after a jump are both stored.
+    """
+
+    t: np.ndarray
+    signals: Mapping[str, np.ndarray]
+    units: Mapping[str, str]
+    stats: Mapping[str, Any] = field(default_factory=dict)
+    title: str = ""
+    jumps: tuple = ()
+
+    def __post_init__(self):
+        t = np.array(self.t, dtype=float)
+        t.setflags(write=False)
+        object.__setattr__(self, "t", t)
+        object.__setattr__(self, "signals", _freeze(self.signals))
+        object.__setattr__(self, "units", MappingProxyType(dict(self.units)))
+        object.__setattr__(self, "stats", MappingProxyType(dict(self.stats)))
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        try:
+            return self.signals[name]
+        except KeyError:
+            import difflib
+
+            close = difflib.get_close_matches(name, self.signals, n=1)
+            raise PneunetError(f"no signal {name!r} in this solution",
+                               hint=f"did you mean {close[0]!r}?" if close else
+                               "signals: " + ", ".join(self.signals)) from None
+
+    def pressure(self, node: str) -> np.ndarray:
+        """Absolute pressure of ``node`` over time, kPa."""
+        return self[f"p_{node}"]
+
+    def flow(self, element: str) -> np.ndarray:
+        """Mass flow through ``element`` (or delivered by a source) over time, mg/s."""
+        return self[f"mdot_{element}"]
+
+    def at(self, time: float) -> dict[str, float]:
+        """All signals linearly interpolated at ``time``."""
+        return {k: float(np.interp(time, self.t, v)) for k, v in self.signals.items()}
+
+    def final(self) -> dict[str, float]:
+        """All signals at the last time point."""
+        return {k: float(v[-1]) for k, v in self.signals.items()}
+
+    def to_pandas(self):
+        """A DataFrame: ``time_s`` and one column per signal named with its unit."""
+        import pandas as pd
+
+        data = {"time_s": self.t}
+        data.update({column_name(k, self.units[k]): v for k, v in self.signals.items()})
+        return pd.DataFrame(data)
+
+    def to_csv(self, path) -> None:
+        """Write :meth:`to_pandas` as CSV (one row per time point)."""
+        from pathlib import Path
+
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        self.to_pandas().to_csv(path, index=False, float_format="%.9g")
+
+    def plot(self, path=None, signals=None):
+        """Plot pressures (top) and flows (bottom); save a PNG when ``path`` is given."""
+        from .plotting import pyplot, save
+
+        names = list(signals) if signals else list(self.signals)
+        pressures = [n for n in names if self.units.get(n) == "kPa" and n.startswith("p_")]
+        flows = [n for n in names if self.units.get(n) == "mg/s"]
+        plt = pyplot()
+        fig, axes = plt.subplots(2 if flows else 1, 1, sharex=True, figsize=(8, 6 if flows else 3.5),
+                                 squeeze=False)
+        for n in pressures:
+            axes[0, 0].plot(self.t, self[n], label=n[2:])
+        axes[0, 0].set_ylabel("pressure (kPa abs)")
+        axes[0, 0].legend(loc="best", fontsize="small")
+        if flows:
+            for n in flows:
+                axes[1, 0].plot(self.t, self[n], label=n[5:])
+            axes[1, 0].set_ylabel("mass flow (mg/s)")
+            axes[1, 0].legend(loc="best", fontsize="small")
+        axes[-1, 0].set_xlabel("time (s)")
+        if self.title:
+            axes[0, 0].set_title(self.title)
+        return save(fig, path) if path is not None else fig
+
+
+@dataclass(frozen=True)
+class OperatingPoint:
+    """A steady state: node pressures (kPa) and element flows (mg/s)."""
+
+    pressures: Mapping[str, float]
+    flows: Mapping[str, float]
+    residual: float = 0.0
+
+    def __post_init__(self):
+        object.__setattr__(self, "pressures", MappingProxyType(dict(self.pressures)))
+        object.__setattr__(self, "flows", MappingProxyType(dict(self.flows)))
+
+    def to_pandas(self):
+        import pandas as pd
+
+        rows = [("p_" + k, v, "kPa") for k, v in self.pressures.items()]
+        rows += [("mdot_" + k, v, "mg/s") for k, v in self.flows.items()]
+        return pd.DataFrame(rows, columns=["signal", "value", "unit"])
+
+    def __str__(self) -> str:
+        lines = [f"  p({k}) = {v:.4f} kPa" for k, v in self.pressures.items()]
+        lines += [f"  mdot({k}) = {v:.4f} mg/s" for k, v in self.flows.items()]
+        return "operating point\n" + "\n".join(lines)

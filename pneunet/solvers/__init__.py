@@ -1,0 +1,1 @@
+"""Numerical solvers: steady states (Newton) and transients (IDA backends)."""

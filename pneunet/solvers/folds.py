@@ -1,0 +1,112 @@
+"""Folds of the algebraic equations and explicit jumps between solution branches.
+
+With the differential states frozen, the algebraic equations F_a(y_d, y_a) = 0
+of a relaxation oscillator have a fold (impasse point): their Jacobian J_aa
+becomes singular and the branch ends; a pure DAE has no continuation there.
+
+*Fold indicator.*  J_aa is LU-factorised; each pivot is divided by the sum of the
+absolute contributions to its row before they cancel.  The smallest such ratio
+is ~1 for a well-posed node and tends to 0 at a fold.  The transient driver
+stops (an IDA root) where it falls below ``fold_threshold`` times its value at
+the last restart.
+
+*Jump.*  The physically right landing point is the limit of vanishing dead
+volumes: with y_d frozen the algebraic nodes relax along
+dy_a/dτ = −F_a(y_d, y_a)/s_a (s_a: the row scale), which leaves the fold and
+settles on the other stable branch.  The differential state is first pushed a
+tiny time δ past the fold along ẏ_d (δ grows until the landing point is no
+longer at a fold), then the relaxation is integrated and polished by Newton.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import SolverError
+
+
+class FoldMonitor:
+    """Fold indicator and jump for one :class:`~pneunet.assembly.CircuitDAE`."""
+
+    def __init__(self, dae, threshold: float):
+        self.dae = dae
+        self.alg = dae.algebraic_idx
+        self.threshold = threshold
+        self.reference = 1.0
+
+    def _blocks(self, t, y):
+        zeros = np.zeros(self.dae.n)
+        _, data = self.dae.evaluate(t, y, zeros, cj=0.0)
+        _, absdata = self.dae.evaluate(t, y, zeros, cj=0.0, absolute=True)
+        sub = np.ix_(self.alg, self.alg)
+        jac = self.dae.csc(data).tocsr()[sub].tocsc()
+        scale = np.asarray(abs(self.dae.csc(absdata)).tocsr()[self.alg].sum(axis=1)).ravel()
+        return jac, np.maximum(scale, 1e-300)
+
+    def indicator(self, t, y) -> float:
+        """Smallest normalised LU pivot of J_aa (0 at a fold, ~1 far from one)."""
+        from scipy.sparse.linalg import splu
+
+        jac, scale = self._blocks(t, y)
+        try:
+            lu = splu(jac)
+        except RuntimeError:
+            return 0.0
+        rows = np.argsort(lu.perm_r)
+        return float(np.min(np.abs(lu.U.diagonal()) / scale[rows]))
+
+    def restart(self, t, y) -> None:
+        """Remember the indicator at a restart: folds are judged relative to it."""
+        self.reference = max(self.indicator(t, y), 1e-12)
+
+    def event(self, t, y) -> float:
+        """Root function for the integrator: crosses zero downwards at a fold."""
+        return self.indicator(t, y) - self.threshold * self.reference
+
+    def jump(self, t, y, yp, delta0):
+        """Land on the other branch: returns ``(t_new, y_new)``."""
+        d = self.dae.differential
+        delta = delta0
+        for _ in range(30):
+            pushed = y.copy()
+            pushed[d] += yp[d] * delta
+            landed = self._relax(t + delta, pushed)
+            if landed is not None and \
+                    self.indicator(t + delta, landed) > 3 * self.threshold * self.reference:
+                return t + delta, landed
+            delta *= 4
+        raise SolverError("could not jump to another solution branch after a fold", time=t,
+                          hint="set a small dead volume instead (.options dead_volume=0.05mL)")
+
+    def _relax(self, t, y):
+        from scipy.integrate import solve_ivp
+        from scipy.sparse import diags
+
+        from .newton import newton
+
+        _, scale = self._blocks(t, y)
+        inv_s = 1.0 / scale
+        base = y.copy()
+
+        def rhs(_tau, ya):
+            full = base.copy()
+            full[self.alg] = ya
+            return -self.dae.evaluate(t, full, np.zeros(self.dae.n))[0][self.alg] * inv_s
+
+        def jac(_tau, ya):
+            full = base.copy()
+            full[self.alg] = ya
+            j, _ = self._blocks(t, full)
+            return -(diags(inv_s) @ j)
+
+        sol = solve_ivp(rhs, (0.0, 1e4), y[self.alg], method="BDF", jac=jac, rtol=1e-8,
+                        atol=1e-8)
+        if not sol.success:
+            return None
+        base[self.alg] = sol.y[:, -1]
+
+        def residual_jac(full):
+            return self.dae.evaluate(t, full, np.zeros(self.dae.n))[0], \
+                self.dae.jacobian(t, full, np.zeros(self.dae.n), 0.0)
+
+        result = newton(residual_jac, base, self.alg)
+        return result.y if result.converged else None

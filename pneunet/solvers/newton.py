@@ -1,0 +1,102 @@
+"""Sparse Newton with pseudo-transient continuation for steady states.
+
+Solves F(y) = 0 for the unknowns listed in ``active`` (the others stay fixed);
+the unknowns are absolute pressures and are kept positive (the quadrature law
+is even in p, so p → −p would otherwise be a spurious root).
+Plain damped Newton is tried first; if it stalls (closed valves make parts of the
+Jacobian vanish), pseudo-transient continuation solves (J + C/Δτ)·Δy = −F with Δτ
+growing as the residual falls (switched evolution relaxation), which follows the
+physical relaxation of the circuit towards its steady state.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass
+class NewtonResult:
+    y: np.ndarray
+    converged: bool
+    iterations: int
+    residual: float
+
+
+def _solve(matrix, rhs):
+    from scipy.sparse.linalg import splu
+
+    try:
+        return splu(matrix.tocsc()).solve(rhs)
+    except RuntimeError:  # exactly singular
+        return None
+
+
+def newton(residual_jac, y0, active, *, scale=None, capacitance=None, tol=1e-9,
+           max_iter=60, max_ptc_iter=2000) -> NewtonResult:
+    """Find y with F(y)[active] = 0.
+
+    residual_jac(y) -> (F, J): residual (n,) and scipy sparse Jacobian (n, n).
+    scale: typical magnitude of y (kPa), for the step criterion.
+    capacitance: per-unknown pseudo capacitance for continuation (mg/kPa).
+    """
+    y = np.array(y0, dtype=float)
+    active = np.asarray(active, dtype=int)
+    if active.size == 0:
+        return NewtonResult(y, True, 0, 0.0)
+    scale = np.maximum(np.abs(y[active]), 1.0) if scale is None else scale
+    f, jac = residual_jac(y)
+    norm = np.max(np.abs(f[active]))
+    flow_scale = max(norm, 1.0)
+    sub = np.ix_(active, active)
+    for it in range(max_iter):
+        step = _solve(jac.tocsr()[sub], -f[active])
+        if step is None or not np.all(np.isfinite(step)):
+            break
+        lam = 1.0
+        while lam > 1e-4:
+            trial = y.copy()
+            trial[active] += lam * step
+            f_trial, jac_trial = residual_jac(trial)
+            norm_trial = np.max(np.abs(f_trial[active]))
+            if np.isfinite(norm_trial) and np.all(trial[active] > 0) and \
+                    norm_trial < norm * (1 - 1e-4 * lam) + 1e-14:
+                break
+            lam *= 0.5
+        else:
+            break
+        y, f, jac, norm = trial, f_trial, jac_trial, norm_trial
+        if np.max(np.abs(lam * step) / scale) < tol and norm < 1e-6 * flow_scale:
+            return NewtonResult(y, True, it + 1, norm)
+    if capacitance is None:
+        return NewtonResult(y, False, max_iter, norm)
+    return _continuation(residual_jac, y, active, scale, capacitance, tol, max_ptc_iter, flow_scale)
+
+
+def _continuation(residual_jac, y, active, scale, capacitance, tol, max_iter, flow_scale):
+    from scipy.sparse import diags
+
+    sub = np.ix_(active, active)
+    cap = np.asarray(capacitance, dtype=float)[active]
+    f, jac = residual_jac(y)
+    norm0 = norm = np.max(np.abs(f[active]))
+    dtau = 1e-4
+    for it in range(max_iter):
+        matrix = jac.tocsr()[sub] + diags(cap / dtau)
+        step = _solve(matrix, -f[active])
+        if step is None or not np.all(np.isfinite(step)):
+            dtau *= 0.1
+            continue
+        trial = y.copy()
+        trial[active] += step
+        f_trial, jac_trial = residual_jac(trial)
+        norm_trial = np.max(np.abs(f_trial[active]))
+        if not np.isfinite(norm_trial) or np.any(trial[active] <= 0):
+            dtau *= 0.25
+            continue
+        y, f, jac = trial, f_trial, jac_trial
+        dtau = min(dtau * max(norm / max(norm_trial, 1e-300), 0.5) * 1.5, 1e12)
+        norm = norm_trial
+        if np.max(np.abs(step) / scale) < tol and norm < 1e-6 * max(flow_scale, norm0):
+            return NewtonResult(y, True, it + 1, norm)
+    return NewtonResult(y, False, max_iter, norm)
