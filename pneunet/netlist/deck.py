@@ -1,0 +1,120 @@
+"""What a parsed netlist describes: the circuit plus analyses, measurements, saves, steps."""
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass, field
+from typing import Any
+
+from ..errors import SourceSpan
+
+
+@dataclass
+class Tran:
+    """``.tran [tstep] tstop [tstart]``: transient analysis to ``t_stop`` seconds."""
+
+    t_stop: float
+    t_step: float | None = None
+    t_start: float = 0.0
+    span: SourceSpan | None = None
+    kind: str = "tran"
+
+
+@dataclass
+class Op:
+    """``.op``: operating point (stationary pressures and flows)."""
+
+    span: SourceSpan | None = None
+    kind: str = "op"
+
+
+@dataclass
+class DC:
+    """``.dc SOURCE start stop step`` (or ``list v1 v2 ...``): operating points of a swept source."""
+
+    source: str
+    values: list
+    span: SourceSpan | None = None
+    kind: str = "dc"
+
+
+@dataclass
+class Step:
+    """``.step param NAME ...``: values of a parameter; several ``.step`` lines nest."""
+
+    param: str
+    values: list
+    span: SourceSpan | None = None
+
+
+@dataclass
+class Signal:
+    """A signal reference ``p(node)`` / ``mdot(element)``; ``key`` names it in a Solution."""
+
+    quantity: str  # 'p', 'mdot', 'dp', 'opening', ...
+    target: str
+
+    @property
+    def key(self) -> str:
+        return f"{self.quantity}_{self.target}"
+
+    def __str__(self) -> str:
+        return f"{self.quantity}({self.target})"
+
+
+@dataclass
+class Measure:
+    """One ``.meas`` statement, values already in internal units.
+
+    ``kind`` is one of find, min, max, avg, pp, rms, integ, when, find_when,
+    trig_targ, period, freq, risetime, falltime, param.
+    """
+
+    name: str
+    kind: str
+    analysis: str = "tran"
+    signal: Signal | None = None
+    args: dict = field(default_factory=dict)
+    span: SourceSpan | None = None
+    text: str = ""
+
+
+@dataclass
+class Deck:
+    """A netlist after elaboration.
+
+    ``circuit`` is the (flattened) :class:`~pneunet.circuit.Circuit`; ``analyses``
+    the analyses in file order; ``measures`` the ``.meas`` statements; ``saves``
+    the signals to write (empty: all); ``steps`` the ``.step`` sweeps (nested,
+    first outermost).  :meth:`variant` rebuilds the deck with parameter values
+    overridden (what ``.step`` does).
+    """
+
+    circuit: Any
+    title: str = ""
+    file: str = "<netlist>"
+    analyses: list = field(default_factory=list)
+    measures: list = field(default_factory=list)
+    saves: list = field(default_factory=list)
+    steps: list = field(default_factory=list)
+    params: dict = field(default_factory=dict)
+    overrides: dict = field(default_factory=dict)
+    source: Any = None  # the parsed statements, to rebuild variants
+
+    def step_points(self) -> list[dict]:
+        """All combinations of the ``.step`` values ([{}] without ``.step``)."""
+        if not self.steps:
+            return [{}]
+        names = [s.param for s in self.steps]
+        return [dict(zip(names, combo)) for combo in itertools.product(*(s.values for s in self.steps))]
+
+    def variant(self, overrides: dict) -> "Deck":
+        """The deck rebuilt with ``.param`` values replaced by ``overrides``."""
+        from .elaborate import elaborate
+
+        return elaborate(self.source, overrides)
+
+    def to_netlist(self) -> str:
+        """Netlist text for this deck (flattened circuit, analyses, measurements)."""
+        from .printer import print_deck
+
+        return print_deck(self)

@@ -1,0 +1,903 @@
+"""Statements -> Deck: includes, subcircuits, arrays, parameters, models, elements, analyses.
+
+All meaning lives here; every error is a :class:`NetlistError` with the span of the
+offending item (line and column), so the CLI can draw a caret under it.
+"""
+from __future__ import annotations
+
+import difflib
+import math
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ..errors import NetlistError, PneunetError, SourceSpan
+from .deck import DC, Deck, Measure, Op, Signal, Step, Tran
+from .expr import Scope, evaluate
+from .syntax import Call, Group, Pair, SourceText, Statement, Str, Word, read_source
+from .values import convert, number_in_expression, set_expression_ambient, split
+
+REFERENCE = ("0", "gnd", "atm")
+DIRECTIVES = (".param", ".subckt", ".ends", ".include", ".inc", ".model", ".ic", ".options",
+              ".option", ".tran", ".op", ".dc", ".step", ".meas", ".measure", ".save", ".print",
+              ".title", ".end")
+
+#: .options name -> (SimulationOptions field, slot)
+OPTIONS = {
+    "rtol": ("rtol", "dimensionless"), "reltol": ("rtol", "dimensionless"),
+    "atol": ("atol", "pressure_difference"), "abstol": ("atol", "pressure_difference"),
+    "ambient": ("ambient", "pressure"), "temperature": ("temperature", "temperature"),
+    "temp": ("temperature", "temperature"), "gas": ("gas", None),
+    "flow_band": ("flow_band", "dimensionless"), "dead_volume": ("dead_volume", "volume"),
+    "max_step": ("max_step", "time"), "fold_threshold": ("fold_threshold", "dimensionless"),
+}
+
+#: valve .model card parameter -> slot
+VALVE_CARD = {"Rf": "resistance", "pclose": "pressure_difference", "ptrans": "pressure_difference",
+              "e": "dimensionless", "ain": "dimensionless", "aout": "dimensionless"}
+
+_RANGE = re.compile(r"^(.*)\[\s*(-?\d+)\s*:\s*(-?\d+)\s*(?::\s*(-?\d+)\s*)?\]$")
+_BRACES = re.compile(r"\{[^{}]*\}")
+
+
+def _err(msg, item_or_span, hint=None):
+    span = item_or_span if isinstance(item_or_span, SourceSpan) else item_or_span.span
+    return NetlistError(msg, span=span, hint=hint)
+
+
+def _close(word, choices):
+    m = difflib.get_close_matches(word, list(choices), n=1, cutoff=0.6)
+    return f"did you mean {m[0]!r}?" if m else None
+
+
+# -- source structure ------------------------------------------------------------------
+@dataclass
+class Subckt:
+    name: str
+    ports: list
+    defaults: list  # Pair items
+    body: list
+    span: SourceSpan
+
+
+@dataclass
+class Source:
+    """A netlist file with includes expanded and subcircuits separated."""
+
+    file: str
+    title: str
+    top: list
+    subckts: dict = field(default_factory=dict)
+
+
+def load(src: SourceText) -> Source:
+    """Expand ``.include`` (relative to the including file) and collect ``.subckt`` blocks."""
+    statements = list(_expand_includes(src, [Path(src.name).resolve()] if src.name != "<netlist>" else []))
+    title = src.title
+    top, subckts, stack = [], {}, []
+    for st in statements:
+        kw = st.keyword if st.is_directive else ""
+        if kw == ".end":
+            break
+        if kw == ".title":
+            title = " ".join(str(i) for i in st.items[1:])
+            continue
+        if kw == ".subckt":
+            if len(st.items) < 2 or not isinstance(st.items[1], Word):
+                raise _err(".subckt needs a name", st.span, "e.g. .subckt CELL in out k=1")
+            ports, defaults = [], []
+            for it in st.items[2:]:
+                if isinstance(it, Pair):
+                    defaults.append(it)
+                elif isinstance(it, Word) and it.text.lower() == "params:":
+                    continue
+                elif isinstance(it, Word):
+                    if defaults:
+                        raise _err(f"port {it.text!r} after parameters", it,
+                                   "list the ports first, then key=value defaults")
+                    ports.append(it.text)
+                else:
+                    raise _err(f"unexpected {it} in .subckt line", it)
+            stack.append(Subckt(st.items[1].text, ports, defaults, [], st.span))
+            continue
+        if kw == ".ends":
+            if not stack:
+                raise _err(".ends without .subckt", st.span)
+            sub = stack.pop()
+            if len(st.items) > 1 and isinstance(st.items[1], Word) and \
+                    st.items[1].text.lower() != sub.name.lower():
+                raise _err(f".ends {st.items[1].text} closes .subckt {sub.name}", st.items[1])
+            key = sub.name.lower()
+            if key in subckts:
+                raise _err(f"subcircuit {sub.name!r} defined twice", sub.span,
+                           f"first defined at {subckts[key].span}")
+            subckts[key] = sub
+            continue
+        if stack:
+            if kw in (".tran", ".op", ".dc", ".step", ".meas", ".measure", ".options", ".option",
+                      ".save", ".print"):
+                raise _err(f"{st.head} is not allowed inside .subckt {stack[-1].name}", st.span,
+                           "put analyses and options at the top level")
+            stack[-1].body.append(st)
+        else:
+            top.append(st)
+    if stack:
+        raise _err(f".subckt {stack[-1].name} has no .ends", stack[-1].span)
+    return Source(src.name, title, top, subckts)
+
+
+def _expand_includes(src: SourceText, chain: list):
+    for st in src.statements:
+        if st.is_directive and st.keyword in (".include", ".inc"):
+            if len(st.items) != 2 or not isinstance(st.items[1], (Word, Str)):
+                raise _err(".include needs one file name", st.span, 'e.g. .include "valves.pn"')
+            base = Path(src.name).resolve().parent if src.name != "<netlist>" else Path.cwd()
+            target = (base / st.items[1].text).resolve()
+            if target in chain:
+                loop = " -> ".join(p.name for p in chain + [target])
+                raise _err(f"recursive .include: {loop}", st.items[1])
+            if not target.is_file():
+                raise _err(f"cannot find included file {st.items[1].text!r}", st.items[1],
+                           f"paths are relative to the including file ({base})")
+            yield from _expand_includes(read_source(target), chain + [target])
+        else:
+            yield st
+
+
+# -- elaboration -------------------------------------------------------------------------
+def elaborate(source: Source, overrides: dict | None = None) -> Deck:
+    return _Builder(source, overrides or {}).build()
+
+
+class _Builder:
+    def __init__(self, source: Source, overrides: dict):
+        self.source = source
+        self.overrides = dict(overrides)
+        self.models: dict[str, object] = {}
+        self.model_spans: dict[str, SourceSpan] = {}
+
+    # ---- top level
+    def build(self) -> Deck:
+        from ..circuit import Circuit
+
+        top = self.source.top
+        for st in top:
+            if st.is_directive and st.keyword not in DIRECTIVES:
+                raise _err(f"unknown directive {st.head!r}", st.items[0],
+                           _close(st.keyword, DIRECTIVES))
+        self.options = self._options([st for st in top if st.keyword in (".options", ".option")])
+        set_expression_ambient(self.options.ambient)
+        self.scope = Scope(dict(self.overrides))
+        for st in top:
+            if st.keyword == ".param":
+                self._param(st, self.scope, self.overrides)
+        for st in top:
+            if st.keyword == ".model":
+                self._model(st, self.scope)
+        for sub in self.source.subckts.values():
+            for st in sub.body:
+                if st.keyword == ".model":
+                    self._model(st, self.scope)
+        self.circuit = Circuit(self.source.title, options=self.options)
+        self._body(top, self.scope, "", {}, [])
+        deck = Deck(self.circuit, title=self.source.title, file=self.source.file,
+                    params=dict(self.scope.values), overrides=dict(self.overrides),
+                    source=self.source)
+        for st in top:
+            kw = st.keyword
+            if kw == ".tran":
+                deck.analyses.append(self._tran(st))
+            elif kw == ".op":
+                if len(st.items) > 1:
+                    raise _err(".op takes no arguments", st.items[1])
+                deck.analyses.append(Op(st.span))
+            elif kw == ".dc":
+                deck.analyses.append(self._dc(st))
+            elif kw == ".step":
+                deck.steps.append(self._step(st))
+            elif kw in (".meas", ".measure"):
+                m = self._meas(st)
+                if any(x.name.lower() == m.name.lower() for x in deck.measures):
+                    raise _err(f"duplicate measurement name {m.name!r}", st.items[2]
+                               if len(st.items) > 2 else st.span)
+                deck.measures.append(m)
+            elif kw in (".save", ".print"):
+                deck.saves.extend(self._saves(st))
+        names = [s.param for s in deck.steps]
+        for i, n in enumerate(names):
+            if n in names[:i]:
+                raise _err(f"parameter {n!r} is stepped twice", deck.steps[i].span)
+        return deck
+
+    def _options(self, statements):
+        from ..options import SimulationOptions
+
+        values, opts = {}, SimulationOptions()
+        for st in statements:
+            for it in st.items[1:]:
+                if not isinstance(it, Pair) or not isinstance(it.key, Word):
+                    raise _err(f"{st.head} expects name=value, got {it}", it,
+                               "e.g. .options ambient=96kPa rtol=1e-6")
+                key = it.key.text.lower()
+                if key not in OPTIONS:
+                    raise _err(f"unknown option {it.key.text!r}", it.key,
+                               _close(key, OPTIONS) or "known: " + ", ".join(sorted(OPTIONS)))
+                field_name, slot = OPTIONS[key]
+                if not isinstance(it.value, Word):
+                    raise _err(f"option {key} expects a value", it.value)
+                if slot is None:
+                    values[field_name] = it.value.text
+                    continue
+                if slot == "pressure" and split(it.value.text) and \
+                        split(it.value.text)[1].endswith("g") and split(it.value.text)[1] != "g":
+                    raise _err("ambient must be an absolute pressure", it.value, "e.g. ambient=96kPa")
+                values[field_name] = self._number(it.value, slot, key, Scope(), opts)
+        try:
+            return opts.replace(**values)
+        except PneunetError as err:
+            raise _err(err.message, statements[-1].span, err.hint) from None
+
+    def _param(self, st, scope, fixed=()):
+        if len(st.items) < 2:
+            raise _err(".param needs name=value", st.span, "e.g. .param Rout={2*0.566}")
+        for it in st.items[1:]:
+            if not isinstance(it, Pair) or not isinstance(it.key, Word) or \
+                    not isinstance(it.value, Word):
+                raise _err(f".param expects name=value, got {it}", it, "e.g. .param Rout={2*0.566}")
+            name = it.key.text
+            if not re.fullmatch(r"[A-Za-z_][A-Za-z_0-9]*", name):
+                raise _err(f"bad parameter name {name!r}", it.key,
+                           "names start with a letter or '_' and contain letters, digits, '_'")
+            if name in fixed:
+                continue  # set by .step (or the caller)
+            scope.values[name] = self._scalar(it.value, scope)
+
+    def _scalar(self, word: Word, scope) -> float:
+        """A value without a slot: expression, number with scale factor or unit, or a name."""
+        text = word.text
+        if text.startswith("{") and text.endswith("}") and _BRACES.fullmatch(text):
+            return evaluate(text[1:-1], scope, word.span, word.span.column + 1)
+        text = self._subst(word, scope)
+        if split(text) is not None:
+            return number_in_expression(text, word.span, self.options.ambient)
+        value = scope.lookup(text)
+        if value is None:
+            raise _err(f"cannot read {text!r} as a number", word,
+                       _close(text, scope.names()) or "write a number, or an expression in {}")
+        return value
+
+    def _subst(self, word: Word, scope) -> str:
+        """Replace each {expr} inside a word by its value."""
+        def repl(m):
+            value = evaluate(m.group(0)[1:-1], scope, word.span, word.span.column + m.start() + 1)
+            return _fmt_int(value)
+        return _BRACES.sub(repl, word.text)
+
+    def _number(self, word, slot, name, scope, options=None) -> float:
+        opts = options or self.options
+        if not isinstance(word, Word):
+            raise _err(f"{name} expects a number, got {word}", word)
+        text = word.text
+        if text.startswith("{") and text.endswith("}") and _BRACES.fullmatch(text):
+            return evaluate(text[1:-1], scope, word.span, word.span.column + 1)
+        text = self._subst(word, scope)
+        if split(text) is None:
+            value = scope.lookup(text)
+            if value is None:
+                raise _err(f"{name}: cannot read {text!r} as a number", word,
+                           _close(text, scope.names()) or
+                           "write a number with its unit, e.g. " + _example(slot))
+            return value
+        return convert(text, slot, word.span, name=name, ambient=opts.ambient, gas=opts.gas_model)
+
+    # ---- models
+    def _model(self, st, scope):
+        if len(st.items) != 3 or not isinstance(st.items[1], Word):
+            raise _err(".model needs a name and a card", st.span,
+                       "e.g. .model myvalve VALVE(Rf=0.5 pclose=90kPa ptrans=150kPa e=2 ain=0.3 aout=0.7)")
+        name, card = st.items[1].text, st.items[2]
+        key = name.lower()
+        if key in self.models:
+            raise _err(f"model {name!r} defined twice", st.items[1],
+                       f"first defined at {self.model_spans[key]}")
+        if isinstance(card, Word):  # .model NAME axi  (an alias of a known valve)
+            self.models[key] = self._lookup_model(card)
+        elif isinstance(card, Call) and card.name.upper() == "VALVE":
+            self.models[key] = self._valve_card(card, scope, name)
+        elif isinstance(card, Call):
+            raise _err(f"unknown model type {card.name!r}", card, "known: VALVE")
+        else:
+            raise _err(f"unexpected {card} in .model", card)
+        self.model_spans[key] = st.span
+
+    def _lookup_model(self, word: Word):
+        from ..valve_params import PAPER_VALVES
+
+        key = word.text.lower()
+        if key in self.models:
+            return self.models[key]
+        if key in PAPER_VALVES:
+            return PAPER_VALVES[key]
+        known = sorted(set(self.models) | set(PAPER_VALVES))
+        raise _err(f"undefined valve model {word.text!r}", word,
+                   _close(key, known) or "known: " + ", ".join(known))
+
+    def _valve_card(self, card: Call, scope, name):
+        from ..valve_params import ValveParams
+
+        values, extra, base = {}, {}, None
+        canon = {k.lower(): k for k in VALVE_CARD}
+        for arg in card.args:
+            if isinstance(arg, Word) and base is None and not values:
+                base = self._lookup_model(arg)
+                continue
+            if not isinstance(arg, Pair) or not isinstance(arg.key, Word):
+                raise _err(f"VALVE(...) expects name=value, got {arg}", arg,
+                           "e.g. VALVE(Rf=0.566 pclose=96.42kPa ...)")
+            k = arg.key.text
+            if k.lower() in canon:
+                k = canon[k.lower()]
+                values[k] = self._number(arg.value, VALVE_CARD[k], k, scope)
+            elif "_" in k:
+                extra[k] = self._scalar(arg.value, scope) if isinstance(arg.value, Word) else \
+                    self._fail_value(arg)
+            else:
+                raise _err(f"unknown valve parameter {k!r}", arg.key,
+                           _close(k, VALVE_CARD) or "known: " + ", ".join(VALVE_CARD) +
+                           " and <effect>_<param> for effects")
+        if base is not None:
+            if not isinstance(base, ValveParams):
+                raise _err("only a six-parameter valve can be the base of a VALVE card", card)
+            values = {**base.as_dict(), **values}
+        missing = [k for k in VALVE_CARD if k not in values]
+        if missing:
+            raise _err(f"valve model {name} misses {', '.join(missing)}", card,
+                       "give all six (Rf pclose ptrans e ain aout) or start from a known valve: "
+                       "VALVE(axi pclose=90kPa)")
+        try:
+            params = ValveParams(**values)
+        except PneunetError as err:
+            raise _err(f"valve model {name}: {err.message}", card, err.hint) from None
+        if not extra:
+            return params
+        try:
+            from ..effects import ValveModel
+        except ImportError:
+            raise _err(f"valve model {name}: effect parameters ({', '.join(extra)}) need "
+                       "pneunet.effects.ValveModel, which this installation lacks", card) from None
+        try:
+            return ValveModel.from_card_params({**values, **extra})
+        except PneunetError as err:
+            raise _err(f"valve model {name}: {err.message}", card, err.hint) from None
+
+    def _fail_value(self, arg):
+        raise _err(f"{arg.key} expects a number", arg.value)
+
+    # ---- elements and subcircuits
+    def _body(self, statements, scope, prefix, nodemap, stack):
+        for st in statements:
+            if st.is_directive:
+                kw = st.keyword
+                if kw == ".ic":
+                    self._ic(st, scope, prefix, nodemap)
+                continue
+            self._element(st, scope, prefix, nodemap, stack)
+
+    def _node(self, text, prefix, nodemap):
+        if text.lower() in REFERENCE:
+            return text
+        if text in nodemap:
+            return nodemap[text]
+        return prefix + text
+
+    def _element(self, st, scope, prefix, nodemap, stack):
+        from .. import elements
+
+        head = st.items[0]
+        if not isinstance(head, Word):
+            raise _err(f"a line must start with an element name or a directive, got {head}", head)
+        rest = st.items[1:]
+        kind_kw = head.text.lower()
+        family = None
+        if len(rest) >= 1 and len(kind_kw) > 1 and kind_kw in _kind_keywords():
+            family = elements.family(kind_kw)
+            name_item = rest[0]
+            if not isinstance(name_item, Word):
+                raise _err(f"{head.text} needs an element name", name_item)
+            rest = rest[1:]
+        else:
+            name_item = head
+        name_text = self._subst(name_item, scope)
+        m = _RANGE.match(name_text)
+        if m:
+            base, lo, hi, stp = m.group(1), int(m.group(2)), int(m.group(3)), int(m.group(4) or 1)
+            if stp == 0:
+                raise _err("array step must not be 0", name_item)
+            indices = list(range(lo, hi + (1 if hi >= lo else -1), stp if hi >= lo else -abs(stp)))
+            if len(indices) > 100000:
+                raise _err(f"array of {len(indices)} elements is too large", name_item)
+        else:
+            base, indices = name_text, [None]
+        for idx in indices:
+            sc = scope if idx is None else scope.child({"index": float(idx)})
+            name = base if idx is None else f"{base}[{idx}]"
+            self._one_element(st, head, name_item, name, family, rest, sc, prefix, nodemap,
+                              stack, idx, indices)
+
+    def _expand_node(self, item, scope, idx, indices):
+        text = self._subst(item, scope)
+        m = _RANGE.match(text)
+        if not m:
+            return text
+        if idx is None:
+            raise _err(f"node range {text!r} on an element that is not an array", item,
+                       "give the element name a range too, e.g. X[1:8]")
+        lo, hi, stp = int(m.group(2)), int(m.group(3)), int(m.group(4) or 1)
+        nodes = list(range(lo, hi + (1 if hi >= lo else -1), stp if hi >= lo else -abs(stp)))
+        if len(nodes) != len(indices):
+            raise _err(f"node range {text!r} has {len(nodes)} entries, the element array "
+                       f"{len(indices)}", item)
+        return f"{m.group(1)}[{nodes[indices.index(idx)]}]"
+
+    def _one_element(self, st, head, name_item, name, family, rest, scope, prefix, nodemap,
+                     stack, idx, indices):
+        from .. import elements
+
+        positional = [it for it in rest if not isinstance(it, Pair)]
+        pairs = [it for it in rest if isinstance(it, Pair)]
+        # subcircuit instance: X... whose last positional word names a subcircuit
+        if family is None and name[0].lower() == "x" and positional and \
+                isinstance(positional[-1], Word) and \
+                positional[-1].text.lower() in self.source.subckts:
+            return self._instance(st, name_item, name, positional, pairs, scope, prefix, nodemap,
+                                  stack, idx, indices)
+        if family is None:
+            try:
+                family = elements.family(name[0])
+            except PneunetError:
+                letters = sorted({a for k in elements.known_kinds()
+                                  for a in (*elements.family(k).aliases, k) if len(a) == 1})
+                raise _err(f"unknown element type {name[0]!r} of {name!r}", name_item,
+                           "the first letter gives the type: " + ", ".join(letters) +
+                           " (X also instantiates a .subckt); or start the line with a kind: "
+                           + ", ".join(elements.known_kinds())) from None
+        n_ports = len(family.ports)
+        full = prefix + name
+        for it in positional[:n_ports]:
+            if not isinstance(it, Word):
+                raise _err(f"{family.kind} {full}: expected node name, got {it}", it)
+        if len(positional) < n_ports:
+            where = positional[-1] if positional else name_item
+            hint = None
+            if family.kind == "valve" and positional and isinstance(positional[-1], Word):
+                hint = f"is {positional[-1].text!r} an undefined subcircuit?" \
+                    if len(positional) == n_ports + 1 else None
+            raise _err(f"{family.kind} {full} needs {n_ports} node(s) ({' '.join(family.ports)}), "
+                       f"got {len(positional)}", where, hint)
+        nodes = [self._node(self._expand_node(it, scope, idx, indices), prefix, nodemap)
+                 for it in positional[:n_ports]]
+        names = list(family.params)
+        canon = {k.lower(): k for k in names}
+        given: dict[str, object] = {}
+        items: dict[str, object] = {}
+        extra = positional[n_ports:]
+        if len(extra) > len(names):
+            bad = extra[len(names)]
+            hint = None
+            if family.kind == "valve" and len(positional) > n_ports + 1:
+                hint = f"a valve has {n_ports} nodes; is {positional[-1]} an undefined subcircuit?"
+            raise _err(f"{family.kind} {full}: unexpected value {bad}", bad,
+                       hint or f"{family.kind} takes {n_ports} nodes then "
+                               + ", ".join(names) + " (in this order, or as key=value)")
+        for key, it in zip(names, extra):
+            items[key] = it
+        for it in pairs:
+            if not isinstance(it.key, Word):
+                raise _err(f"unexpected {it.key} before '='", it.key)
+            k = it.key.text
+            key = k if k in family.params else canon.get(k.lower())
+            if key is None:
+                raise _err(f"unknown parameter {k!r} for {family.kind} {full}", it.key,
+                           _close(k, names) or "known: " + ", ".join(names))
+            if key in items:
+                raise _err(f"parameter {key} given twice", it.key)
+            items[key] = it.value
+        for key, it in items.items():
+            given[key] = self._param_value(family, key, it, scope, full)
+        try:
+            self.circuit.add(family.kind, full, nodes, span=name_item.span, **given)
+        except PneunetError as err:
+            if "duplicate element name" in err.message:
+                raise _err(err.message, name_item, err.hint) from None
+            raise _err(f"{family.kind} {full}: {err.message}", name_item, err.hint) from None
+
+    def _param_value(self, family, key, item, scope, full):
+        from ..waveforms import Waveform  # noqa: F401
+
+        spec = family.params[key]
+        label = f"{full}: {key}"
+        if spec.kind == "object":
+            if family.kind == "valve" or key in ("model", "backward"):
+                if isinstance(item, Call) and item.name.upper() == "VALVE":
+                    return self._valve_card(item, scope, f"{full}.{key}")
+                if not isinstance(item, Word):
+                    raise _err(f"{label} expects a model name", item)
+                return self._lookup_model(item)
+            return item.text if isinstance(item, (Word, Str)) else str(item)
+        if isinstance(item, Call) and spec.kind == "waveform":
+            return self._waveform(item, spec.slot, scope, label)
+        if isinstance(item, Call):
+            raise _err(f"{label} expects a number, got {item.name}(...)", item,
+                       "waveforms (STEP, PULSE, PWL, SIN) only drive sources")
+        value = self._number(item, spec.slot, key, scope)
+        try:
+            spec.check(value, label, key)
+        except PneunetError as err:
+            raise _err(err.message, item, err.hint) from None
+        return value
+
+    def _waveform(self, call: Call, slot, scope, label):
+        from .. import waveforms as wf
+
+        kind = call.name.upper()
+        diff = "pressure_difference" if slot == "pressure" else slot
+        layouts = {
+            "STEP": (wf.Step, [("initial", slot), ("final", slot), ("at", "time"), ("rise", "time")], 2),
+            "PULSE": (wf.Pulse, [("low", slot), ("high", slot), ("delay", "time"), ("rise", "time"),
+                                 ("fall", "time"), ("width", "time"), ("period", "time")], 2),
+            "SIN": (wf.Sine, [("offset", slot), ("amplitude", diff), ("frequency", "frequency"),
+                              ("delay", "time"), ("damping", "frequency"),
+                              ("phase", "dimensionless")], 3),
+        }
+        if kind == "PWL":
+            args = call.args
+            if any(isinstance(a, Pair) for a in args):
+                raise _err("PWL takes time value pairs", call)
+            if len(args) < 2 or len(args) % 2:
+                raise _err(f"PWL needs pairs of time and value, got {len(args)} number(s)", call,
+                           "e.g. PWL(0 96kPa 1 296kPa 2 296kPa)")
+            times = [self._number(a, "time", "PWL time", scope) for a in args[0::2]]
+            values = [self._number(a, slot, "PWL value", scope) for a in args[1::2]]
+            for i in range(1, len(times)):
+                if times[i] < times[i - 1]:
+                    raise _err("PWL times must not decrease", args[2 * i],
+                               "write corners in time order: PWL(0 96 1 200 …)")
+            return wf.PiecewiseLinear(tuple(times), tuple(values))
+        if kind == "DC" and len(call.args) == 1:
+            return self._number(call.args[0], slot, label, scope)
+        if kind not in layouts:
+            raise _err(f"unknown waveform {call.name!r}", call,
+                       _close(kind, list(layouts) + ["PWL"]) or "known: STEP, PULSE, PWL, SIN")
+        cls, fields_, required = layouts[kind]
+        values, pos = {}, 0
+        for a in call.args:
+            if isinstance(a, Pair):
+                k = a.key.text.lower() if isinstance(a.key, Word) else ""
+                match = [f for f in fields_ if f[0] == k]
+                if not match:
+                    raise _err(f"unknown {kind} argument {k!r}", a.key,
+                               _close(k, [f[0] for f in fields_]) or
+                               "known: " + ", ".join(f[0] for f in fields_))
+                f = match[0]
+                values[f[0]] = self._number(a.value, f[1], f"{kind} {f[0]}", scope)
+            else:
+                if pos >= len(fields_):
+                    raise _err(f"too many arguments for {kind} (at most {len(fields_)})", a)
+                f = fields_[pos]
+                values[f[0]] = self._number(a, f[1], f"{kind} {f[0]}", scope)
+                pos += 1
+        missing = [f[0] for f in fields_[:required] if f[0] not in values]
+        if missing:
+            raise _err(f"{kind} needs {', '.join(missing)}", call,
+                       f"{kind}(" + " ".join(f[0] for f in fields_) + ")")
+        try:
+            return cls(**values)
+        except PneunetError as err:
+            raise _err(err.message, call, err.hint) from None
+
+    def _instance(self, st, name_item, name, positional, pairs, scope, prefix, nodemap, stack,
+                  idx, indices):
+        sub_word = positional[-1]
+        sub = self.source.subckts[sub_word.text.lower()]
+        full = prefix + name
+        if sub.name.lower() in stack:
+            loop = " -> ".join(stack + [sub.name.lower()])
+            raise _err(f"recursive subcircuit: {loop}", sub_word,
+                       "a subcircuit cannot contain an instance of itself")
+        nodes = positional[:-1]
+        if len(nodes) != len(sub.ports):
+            raise _err(f"subcircuit {sub.name} has {len(sub.ports)} port(s) "
+                       f"({' '.join(sub.ports)}), instance {full} gives {len(nodes)}", sub_word)
+        for it in nodes:
+            if not isinstance(it, Word):
+                raise _err(f"expected node name, got {it}", it)
+        actual = {port: self._node(self._expand_node(it, scope, idx, indices), prefix, nodemap)
+                  for port, it in zip(sub.ports, nodes)}
+        # parameters: global scope <- defaults <- instance values <- local .param
+        inner = Scope({}, self.scope)
+        for d in sub.defaults:
+            inner.values[d.key.text] = self._scalar(d.value, inner) if isinstance(d.value, Word) \
+                else self._fail_value(d)
+        for it in pairs:
+            if not isinstance(it.key, Word) or not isinstance(it.value, Word):
+                raise _err(f"expected name=value, got {it}", it)
+            k = it.key.text
+            if k not in inner.values:
+                known = [d.key.text for d in sub.defaults]
+                raise _err(f"subcircuit {sub.name} has no parameter {k!r}", it.key,
+                           _close(k, known) or ("parameters: " + ", ".join(known) if known else
+                                                "it declares no parameters"))
+            inner.values[k] = self._scalar(it.value, scope)
+        if idx is not None:
+            inner.values.setdefault("index", float(idx))
+        for s in sub.body:
+            if s.keyword == ".param":
+                self._param(s, inner)
+        self._body(sub.body, inner, full + ".", actual, stack + [sub.name.lower()])
+
+    def _ic(self, st, scope, prefix, nodemap):
+        if len(st.items) < 2:
+            raise _err(".ic needs node=pressure", st.span, "e.g. .ic tank=200kPag or .ic p(tank)=296kPa")
+        for it in st.items[1:]:
+            if not isinstance(it, Pair):
+                raise _err(f".ic expects node=pressure, got {it}", it)
+            key = it.key
+            if isinstance(key, Call) and key.name.lower() in ("p", "v") and len(key.args) == 1 \
+                    and isinstance(key.args[0], Word):
+                node = key.args[0].text
+            elif isinstance(key, Word):
+                node = key.text
+            else:
+                raise _err(f".ic expects node=pressure, got {key}", key)
+            value = self._number(it.value, "pressure", f"initial pressure of {node}", scope)
+            node = self._node(node, prefix, nodemap)
+            if node not in self.circuit.nodes:
+                raise _err(f"initial condition for unknown node {node!r}", key,
+                           _close(node, self.circuit.nodes))
+            self.circuit.set_initial(node, value)
+
+    # ---- analyses
+    def _positional_numbers(self, st, slot, label):
+        out = []
+        for it in st.items[1:]:
+            if not isinstance(it, Word):
+                raise _err(f"{st.head} expects numbers, got {it}", it)
+            out.append(self._number(it, slot, label, self.scope))
+        return out
+
+    def _tran(self, st):
+        values = self._positional_numbers(st, "time", ".tran time")
+        if not values or len(values) > 3:
+            raise _err(f".tran takes [tstep] tstop [tstart], got {len(values)} value(s)", st.span,
+                       "e.g. .tran 10ms 5s")
+        step, stop, start = (None, values[0], 0.0) if len(values) == 1 else \
+            (values[0], values[1], values[2] if len(values) == 3 else 0.0)
+        if stop <= 0:
+            raise _err(f"t_stop must be > 0 s, got {stop:g}", st.items[2 if len(values) > 1 else 1])
+        if step is not None and step <= 0:
+            raise _err(f"t_step must be > 0 s, got {step:g}", st.items[1])
+        if start < 0 or start >= stop:
+            raise _err("t_start must lie in [0, t_stop)", st.items[3])
+        return Tran(stop, step, start, st.span)
+
+    def _dc(self, st):
+        items = st.items[1:]
+        if not items or not isinstance(items[0], Word):
+            raise _err(".dc needs a source name", st.span, "e.g. .dc PH 96kPa 596kPa 25kPa")
+        name = items[0].text
+        spec = self.circuit.elements.get(name)
+        if spec is None or spec.kind not in ("pressure_source", "flow_source"):
+            sources = [n for n, e in self.circuit.elements.items()
+                       if e.kind in ("pressure_source", "flow_source")]
+            raise _err(f".dc sweeps a source; {name!r} is " +
+                       ("not a source" if spec else "not defined"), items[0],
+                       _close(name, sources) or ("sources: " + ", ".join(sources)))
+        from .. import elements
+
+        slot = elements.family(spec.kind).params["value"].slot
+        values = self._sweep_values(st, items[1:], lambda w: self._number(w, slot, name, self.scope))
+        return DC(name, values, st.span)
+
+    def _sweep_values(self, st, items, conv):
+        if items and isinstance(items[0], Word) and items[0].text.lower() == "list":
+            if len(items) < 2:
+                raise _err("list needs at least one value", items[0])
+            return [conv(w) for w in items[1:]]
+        if items and isinstance(items[0], Word) and items[0].text.lower() == "lin":
+            items = items[1:]
+        if len(items) != 3:
+            raise _err(f"{st.head} needs start stop step (or list v1 v2 ...), got {len(items)} "
+                       "value(s)", items[-1] if items else st.span)
+        start, stop, step = (conv(w) for w in items)
+        if step == 0 or (stop - start) / step < 0:
+            raise _err(f"step {step:g} does not go from {start:g} to {stop:g}", items[2])
+        n = int(math.floor((stop - start) / step + 1e-9)) + 1
+        if n > 100000:
+            raise _err(f"{n} sweep points are too many", items[2])
+        return [start + i * step for i in range(n)]
+
+    def _step(self, st):
+        items = list(st.items[1:])
+        if items and isinstance(items[0], Word) and items[0].text.lower() in ("lin", "list") \
+                and len(items) > 2 and isinstance(items[1], Word) and items[1].text.lower() == "param":
+            items = [items[1], items[2], items[0]] + items[3:]
+        if items and isinstance(items[0], Word) and items[0].text.lower() == "param":
+            items = items[1:]
+        if not items or not isinstance(items[0], Word) or \
+                not re.fullmatch(r"[A-Za-z_][A-Za-z_0-9]*", items[0].text):
+            raise _err(".step needs a parameter name", items[0] if items else st.span,
+                       "e.g. .step param Rout list 0.566 1.132")
+        name = items[0].text
+        values = self._sweep_values(st, items[1:], lambda w: self._scalar(w, self.scope))
+        return Step(name, values, st.span)
+
+    def _signal(self, item, label="signal"):
+        if isinstance(item, Call) and len(item.args) == 1 and isinstance(item.args[0], Word):
+            q = item.name.lower()
+            q = {"v": "p", "pressure": "p", "m": "mdot", "i": "mdot", "flow": "mdot"}.get(q, q)
+            target = item.args[0].text
+            if q == "p":
+                if target not in self.circuit.nodes:
+                    raise _err(f"unknown node {target!r}", item.args[0],
+                               _close(target, self.circuit.nodes))
+            elif target not in self.circuit.elements:
+                raise _err(f"unknown element {target!r}", item.args[0],
+                           _close(target, self.circuit.elements))
+            return Signal(q, target)
+        raise _err(f"expected a {label} like p(node) or mdot(element), got {item}", item)
+
+    def _saves(self, st):
+        items = st.items[1:]
+        if items and isinstance(items[0], Word) and items[0].text.lower() in ("tran", "op", "dc"):
+            items = items[1:]
+        if len(items) == 1 and isinstance(items[0], Word) and items[0].text.lower() == "all":
+            return []
+        if not items:
+            raise _err(f"{st.head} needs signals", st.span, "e.g. .save p(tank) mdot(X1)")
+        return [self._signal(it) for it in items]
+
+    def _meas(self, st) -> Measure:
+        items = list(st.items[1:])
+        analysis = "tran"
+        if items and isinstance(items[0], Word) and items[0].text.lower() in ("tran", "op", "dc"):
+            analysis = items.pop(0).text.lower()
+        if len(items) < 2 or not isinstance(items[0], Word):
+            raise _err(".meas needs a name and a measurement", st.span,
+                       "e.g. .meas tran period PERIOD p(tank)")
+        name = items[0].text
+        if not re.fullmatch(r"[A-Za-z_][A-Za-z_0-9]*", name):
+            raise _err(f"bad measurement name {name!r}", items[0])
+        kind_item = items[1]
+        if not isinstance(kind_item, Word):
+            raise _err(f"expected a measurement kind, got {kind_item}", kind_item)
+        kind = kind_item.text.lower()
+        rest = items[2:]
+        m = Measure(name, kind, analysis, span=st.span,
+                    text=" ".join(str(i) for i in st.items))
+        kinds = ("find", "min", "max", "avg", "pp", "rms", "integ", "when", "trig", "period",
+                 "freq", "risetime", "falltime", "filltime", "param")
+        if kind not in kinds:
+            raise _err(f"unknown measurement {kind_item.text!r}", kind_item,
+                       _close(kind, kinds) or "known: " + ", ".join(k.upper() for k in kinds))
+        time_slot = "time"
+        if analysis == "dc":
+            time_slot = None  # sweep values (in the source's unit)
+        if kind == "param":
+            if len(rest) != 1 or not isinstance(rest[0], Word):
+                raise _err("PARAM needs one {expression} of other measurements", kind_item)
+            m.args["expr"] = rest[0]
+            return m
+        if kind == "when":
+            if not rest or not isinstance(rest[0], Pair):
+                raise _err("WHEN needs signal=value", rest[0] if rest else kind_item,
+                           "e.g. .meas t1 WHEN p(tank)=296kPa RISE=1")
+            m.signal = self._signal(rest[0].key)
+            m.args["level"] = self._level(m.signal, rest[0].value)
+            self._meas_keys(m, rest[1:], ("rise", "fall", "cross", "from", "to", "td"), time_slot)
+            return m
+        if kind == "trig":
+            targ = next((i for i, it in enumerate(rest) if isinstance(it, Word)
+                         and it.text.lower() == "targ"), None)
+            if targ is None or not rest:
+                raise _err("TRIG needs ... TARG ...", kind_item,
+                           "e.g. .meas dt TRIG p(a) VAL=150kPa RISE=1 TARG p(b) VAL=150kPa RISE=1")
+            m.kind = "trig_targ"
+            for part, label in ((rest[:targ], "trig"), (rest[targ + 1:], "targ")):
+                if not part:
+                    raise _err(f"{label.upper()} needs a signal", kind_item)
+                sig = self._signal(part[0])
+                sub = Measure(label, label, analysis)
+                sub.signal = sig
+                self._meas_keys(sub, part[1:], ("val", "rise", "fall", "cross", "td"), time_slot)
+                if "val" not in sub.args:
+                    raise _err(f"{label.upper()} needs VAL=", part[0])
+                m.args[label] = sub
+            return m
+        if not rest:
+            raise _err(f"{kind.upper()} needs a signal", kind_item)
+        m.signal = self._signal(rest[0])
+        tail = rest[1:]
+        if kind == "find":
+            if tail and isinstance(tail[0], Word) and tail[0].text.lower() == "when":
+                if len(tail) < 2 or not isinstance(tail[1], Pair):
+                    raise _err("FIND ... WHEN needs signal=value", tail[0])
+                m.kind = "find_when"
+                sig = self._signal(tail[1].key)
+                m.args["when"] = sig
+                m.args["level"] = self._level(sig, tail[1].value)
+                self._meas_keys(m, tail[2:], ("rise", "fall", "cross", "from", "to", "td"), time_slot)
+                return m
+            self._meas_keys(m, tail, ("at",), time_slot)
+            if "at" not in m.args and analysis != "op":
+                raise _err("FIND needs AT=time or WHEN signal=value", kind_item,
+                           "e.g. .meas p5 FIND p(tank) AT=5s")
+            return m
+        if kind in ("risetime", "falltime", "filltime"):
+            self._meas_keys(m, tail, ("low", "high", "from", "to"), time_slot, signal=m.signal)
+            if "low" not in m.args or "high" not in m.args:
+                raise _err(f"{kind.upper()} needs LOW= and HIGH=", kind_item,
+                           "e.g. .meas fill FILLTIME p(act) LOW=96kPa HIGH=296kPa")
+            return m
+        if kind in ("period", "freq"):
+            self._meas_keys(m, tail, ("level", "from", "to", "cycles"), time_slot, signal=m.signal)
+            return m
+        self._meas_keys(m, tail, ("from", "to"), time_slot)
+        return m
+
+    def _level(self, sig, word):
+        slot = {"p": "pressure", "mdot": "flow"}.get(sig.quantity, "dimensionless")
+        return self._number(word, slot, f"level of {sig}", self.scope)
+
+    def _meas_keys(self, m, items, allowed, time_slot, signal=None):
+        for it in items:
+            if not isinstance(it, Pair) or not isinstance(it.key, Word):
+                raise _err(f"unexpected {it} in .meas", it,
+                           "options are key=value: " + ", ".join(a.upper() + "=" for a in allowed))
+            k = it.key.text.lower()
+            if k not in allowed:
+                raise _err(f"unknown .meas option {it.key.text!r}", it.key,
+                           _close(k, allowed) or "known here: " + ", ".join(a.upper() for a in allowed))
+            if k in ("rise", "fall", "cross", "cycles"):
+                if isinstance(it.value, Word) and it.value.text.lower() == "last":
+                    m.args["edge"], m.args["n"] = (k if k != "cycles" else "rise"), -1
+                    continue
+                v = self._number(it.value, "dimensionless", k.upper(), self.scope)
+                if v != int(v) or v < 1:
+                    raise _err(f"{k.upper()} must be a whole number >= 1 (or LAST)", it.value)
+                if k == "cycles":
+                    m.args["cycles"] = int(v)
+                else:
+                    m.args["edge"], m.args["n"] = k, int(v)
+            elif k in ("val", "level", "low", "high"):
+                sig = signal or m.signal
+                m.args[k] = self._level(sig, it.value) if sig else \
+                    self._number(it.value, "dimensionless", k, self.scope)
+            else:  # at, from, to, td
+                key = "from" if k == "td" else k
+                if time_slot is None:
+                    m.args[key] = self._scalar(it.value, self.scope)
+                else:
+                    m.args[key] = self._number(it.value, time_slot, k.upper(), self.scope)
+
+
+def _kind_keywords():
+    from .. import elements
+
+    out = set()
+    for k in elements.known_kinds():
+        fam = elements.family(k)
+        out.add(k.lower())
+        out.update(a.lower() for a in fam.aliases if len(a) > 1)
+    return out
+
+
+def _fmt_int(value: float) -> str:
+    if float(value).is_integer() and abs(value) < 1e15:
+        return str(int(value))
+    return repr(float(value))
+
+
+def _example(slot):
+    from ..units import example
+
+    return example(slot)

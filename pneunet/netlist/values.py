@@ -1,0 +1,114 @@
+"""Numbers with units and SPICE scale factors, converted for a parameter slot.
+
+The rule for the letters after a number (documented in docs/netlist.md):
+
+1. If the letters are a unit of the slot's dimension, they are a unit:
+   ``5ms`` (time), ``200mL`` (volume), ``1.2mm`` (length), ``1m`` in a length
+   slot is one metre, ``293K`` in a temperature slot is kelvin.
+2. Otherwise, if they are a SPICE scale factor — ``f p n u µ m k meg g t``
+   (case-insensitive; ``m`` is milli, ``meg`` mega as in SPICE) — the number is
+   scaled and read in the slot's internal unit: ``2k`` = 2000, ``5m`` = 0.005.
+3. Otherwise they must be a unit (pint syntax, e.g. ``kPa*s/mg``, ``L/min``);
+   a unit of the wrong dimension is an error naming the slot and its unit.
+
+A trailing ``g`` on a pressure unit means gauge (``200kPag``): the ambient
+pressure (``.options ambient=``) is added.  A bare number is in the internal
+unit of the slot (kPa, mg/s, kPa·s/mg, mL, mm, s, K).
+"""
+from __future__ import annotations
+
+import functools
+import re
+
+from ..errors import NetlistError, ParameterError, SourceSpan
+
+SCALE = {"f": 1e-15, "p": 1e-12, "n": 1e-9, "u": 1e-6, "µ": 1e-6, "m": 1e-3, "k": 1e3,
+         "meg": 1e6, "g": 1e9, "t": 1e12}
+
+_NUMBER = re.compile(r"^([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)(.*)$")
+
+
+def split(text: str):
+    """``'200kPag'`` -> (200.0, 'kPag'); None if the text does not start with a number."""
+    m = _NUMBER.match(text)
+    if not m:
+        return None
+    return float(m.group(1)), m.group(2)
+
+
+@functools.lru_cache(maxsize=512)
+def _unit_dimension_matches(unit: str, slot: str) -> bool:
+    """True if ``unit`` is a unit whose dimension fits ``slot``."""
+    from ..units import SLOTS, registry
+
+    try:
+        ureg = registry()
+        q = ureg.Quantity(1.0, unit)
+        target = SLOTS[slot]
+        if slot == "flow" and q.check("[volume]/[time]"):
+            return True
+        return q.check(ureg.Quantity(1.0, target).dimensionality) if target else \
+            q.dimensionless
+    except Exception:  # noqa: BLE001 - any pint failure means "not a unit"
+        return False
+
+
+def convert(text: str, slot: str, span: SourceSpan, *, name: str, ambient: float, gas) -> float:
+    """Convert a literal like ``496kPa``, ``2k`` or ``0.566`` for ``slot``."""
+    from ..units import GAUGE_UNITS, SLOTS, example, pretty, to_internal
+
+    parts = split(text)
+    if parts is None:
+        raise NetlistError(f"{name}: cannot read {text!r} as a number",
+                           span=span, hint=f"{slot} is written like {example(slot)}")
+    magnitude, suffix = parts
+    if not suffix:
+        return magnitude
+    gauge = suffix in GAUGE_UNITS
+    unit = suffix[:-1] if gauge else suffix
+    if not gauge and not _unit_dimension_matches(unit, slot) and suffix.lower() in SCALE:
+        return magnitude * SCALE[suffix.lower()]
+    if slot == "dimensionless" and not gauge:
+        raise NetlistError(f"{name} is a plain number, got unit {suffix!r}", span=span,
+                           hint="write it without a unit (SPICE scale factors like 2k are allowed)")
+    try:
+        return float(to_internal(magnitude, unit, slot, gauge=gauge, ambient_kpa=ambient,
+                                 gas=gas, name=name))
+    except ParameterError as err:
+        if err.message.startswith(f"{name}: unknown unit"):
+            raise NetlistError(f"{name}: unknown unit {suffix!r}", span=span,
+                               hint=f"{name} needs {pretty(SLOTS[slot])}, e.g. {example(slot)}") \
+                from None
+        raise NetlistError(err.message, span=span, hint=err.hint) from None
+
+
+#: internal units tried, in order, for a unit in an expression or a .param value
+_DIMENSION_ORDER = ("pressure", "flow", "resistance", "volume", "length", "time",
+                    "temperature", "frequency")
+
+
+def number_in_expression(text: str, span: SourceSpan, ambient: float = 101.325) -> float:
+    """A number inside an expression: scale factor, or a unit -> internal unit of its dimension."""
+    magnitude, suffix = split(text)
+    if not suffix:
+        return magnitude
+    if suffix.lower() in SCALE:
+        return magnitude * SCALE[suffix.lower()]
+    from ..units import GAUGE_UNITS, to_internal
+
+    gauge = suffix in GAUGE_UNITS
+    unit = suffix[:-1] if gauge else suffix
+    for slot in _DIMENSION_ORDER:
+        if _unit_dimension_matches(unit, slot):
+            return float(to_internal(magnitude, unit, slot, gauge=gauge,
+                                     ambient_kpa=_AMBIENT.get("kPa", ambient)))
+    raise NetlistError(f"unknown unit or scale factor {suffix!r} in {text!r}", span=span,
+                       hint="scale factors: f p n u m k meg g t; units: kPa, mL, ms, ...")
+
+
+# ambient pressure used for gauge units inside expressions (set while elaborating)
+_AMBIENT: dict[str, float] = {}
+
+
+def set_expression_ambient(kpa: float) -> None:
+    _AMBIENT["kPa"] = kpa
