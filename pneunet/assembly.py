@@ -103,6 +103,11 @@ class CircuitDAE:
         return csc_matrix((np.ones(self.nnz), self._csc_indices, self._csc_indptr),
                           shape=(self.n, self.n))
 
+    def entries(self):
+        """(row, column) of every stored Jacobian entry, in CSC data order."""
+        cols = np.repeat(np.arange(self.n), np.diff(self._csc_indptr))
+        return self._csc_indices.astype(int), cols
+
     def csc(self, data):
         """A CSC matrix with this pattern and the given data."""
         from scipy.sparse import csc_matrix
@@ -125,14 +130,15 @@ class CircuitDAE:
     def evaluate(self, t, y, ydot, cj=None, absolute=False):
         """Residual F(t, y, ẏ); with ``cj`` also the CSC data of ∂F/∂y + cj·∂F/∂ẏ.
 
-        With ``absolute`` the data holds Σ|contribution| instead (the scale of
-        each entry before cancellation, used by the fold indicator).
+        With ``absolute`` a third array holds Σ|contribution| per entry (the scale
+        of each entry before cancellation, used by the fold indicator).
         """
         p = self.full_pressures(t, y)
         pdot = np.zeros_like(p)
         pdot[:self.n] = ydot
         res = np.zeros(self.n)
         data = np.zeros(self.nnz) if cj is not None else None
+        scale = np.zeros(self.nnz) if absolute else None
         for block in self._blocks:
             q, dq_dp, dq_dpdot = block.family.outflows(t, p[block.port_node], pdot[block.port_node])
             free = block.free_port
@@ -141,9 +147,10 @@ class CircuitDAE:
                 continue
             values = dq_dp if dq_dpdot is None else dq_dp + cj * dq_dpdot
             values = values[block.jac_mask]
-            data += np.bincount(block.jac_pos, weights=np.abs(values) if absolute else values,
-                                minlength=self.nnz)
-        return res, data
+            data += np.bincount(block.jac_pos, weights=values, minlength=self.nnz)
+            if absolute:
+                scale += np.bincount(block.jac_pos, weights=np.abs(values), minlength=self.nnz)
+        return (res, data, scale) if absolute else (res, data)
 
     def jacobian(self, t, y, ydot, cj=0.0):
         """∂F/∂y + cj·∂F/∂ẏ as a scipy CSC matrix."""

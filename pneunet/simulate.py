@@ -14,7 +14,7 @@ import numpy as np
 from .assembly import CircuitDAE
 from .errors import SolverError
 from .solution import OperatingPoint, Solution
-from .solvers.base import EVENT, FAILED, available_backends
+from .solvers.base import EVENT, FAILED, StepResult, available_backends
 from .solvers.newton import newton
 
 
@@ -118,11 +118,23 @@ def transient(circuit, t_stop: float, *, t_step: float | None = None, t_start: f
     t = t_start
     bar = _progress(progress, t_start, t_stop)
     out_i = 0
+    retried_at = None
     try:
         while t < t_stop:
             next_stop = stops[np.searchsorted(stops, t, side="right")]
             target = min(outputs[out_i], next_stop) if outputs is not None else next_stop
             step = integrator.step(target, next_stop, onestep=outputs is None)
+            if step.status == FAILED and folds is not None and len(times) > 1:
+                if retried_at != times[-1]:
+                    # a large step ran past a fold: restart with small steps so that
+                    # the fold indicator can stop the integration in time
+                    retried_at = times[-1]
+                    states[-1], _ = consistent_state(dae, times[-1], states[-1])
+                    _restart(integrator, None, dae, times[-1], states[-1])
+                    continue
+                if folds.near_fold(times[-1], states[-1]):
+                    step = StepResult(EVENT, times.pop(), states.pop(),
+                                      dae.derivative(times[-1], states[-1]), step.message)
             if step.status == FAILED:
                 raise _failure(dae, step, times, states, branch_jumps, integrator)
             t, y = step.t, step.y
@@ -132,7 +144,7 @@ def transient(circuit, t_stop: float, *, t_step: float | None = None, t_start: f
                 while out_i < len(outputs) - 1 and outputs[out_i] <= t + 1e-12:
                     out_i += 1
             if step.status == EVENT:
-                t, y = folds.jump(t, y, step.yp, delta0=1e-9 * max(t_stop - t_start, 1.0))
+                t, y = folds.jump(t, y, step.yp, previous=(times[-2], states[-2]))
                 branch_jumps.append(t)
                 times.append(t)
                 states.append(y.copy())

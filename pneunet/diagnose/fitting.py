@@ -75,7 +75,11 @@ def initial_params(frame: pd.DataFrame, mdot_min=None) -> ValveParams:
         fit_valve = None
     if fit_valve is not None:
         try:
-            fit = fit_valve(frame, mdot_min="auto" if mdot_min is None else mdot_min)
+            kw = {"mdot_min": "auto" if mdot_min is None else mdot_min}
+            try:
+                fit = fit_valve(frame, n_boot=0, **kw)  # no bootstrap: only a start
+            except TypeError:
+                fit = fit_valve(frame, **kw)
             return fit.params
         except Exception:  # noqa: BLE001 — fall back to the thin adapter below
             pass
