@@ -1,0 +1,108 @@
+"""``pneunet run FILE.pn``: parse, validate, run every analysis, write CSV, print ``.meas``."""
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser(
+        "run", help="simulate a netlist: run its analyses, write CSV, print .meas results",
+        description="Parse and validate a netlist, run every analysis (.tran, .op, .dc), "
+                    "for each .step point if any, write one CSV per analysis (columns named "
+                    "with units, e.g. p_tank_kPa) and print the .meas results. With .step, "
+                    "also writes meas_summary.csv (one row per step). "
+                    "Exit codes: 0 ok, 1 simulation failed, 2 bad input.")
+    p.add_argument("netlist", metavar="FILE.pn", help="netlist file")
+    p.add_argument("-o", "--output", metavar="DIR", default=None,
+                   help="output folder (default: ./<netlist name>_results)")
+    p.add_argument("--plot", action="store_true", help="also write a PNG plot per transient")
+    p.add_argument("--json", action="store_true",
+                   help="print measurements and written files as JSON on stdout")
+    p.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=main)
+
+
+def _fmt(v):
+    return "FAILED" if v is None else f"{v:.6g}"
+
+
+def main(args) -> int:
+    from ..netlist import parse_file
+    from ..netlist.runner import measure_unit, run_deck
+
+    path = Path(args.netlist)
+    deck = parse_file(path)
+    deck.circuit.validate()
+    points = deck.step_points()
+    out_dir = Path(args.output) if args.output else Path.cwd() / f"{path.stem}_results"
+    out_dir.mkdir(parents=True, exist_ok=True)
+    say = (lambda *a: None) if (args.quiet or args.json) else print
+    progress = not (args.quiet or args.json or args.no_progress) and sys.stderr.isatty()
+    saves = [s.key for s in deck.saves]
+    report = {"netlist": str(path), "output": str(out_dir), "steps": []}
+    summary_rows = []
+    for i, point in enumerate(points, 1):
+        d = deck.variant(point) if point else deck
+        if point:
+            d.circuit.validate()
+            say("step " + str(i) + ": " + ", ".join(f"{k}={v:g}" for k, v in point.items()))
+        tag = f"_step{i}" if point else ""
+        res = run_deck(d, progress=progress)
+        files = []
+        counts: dict[str, int] = {}
+        for analysis, result in res.results:
+            counts[analysis.kind] = counts.get(analysis.kind, 0) + 1
+            suffix = "" if counts[analysis.kind] == 1 else str(counts[analysis.kind])
+            name = f"{analysis.kind}{suffix}{tag}"
+            table = result.to_pandas()
+            if saves and analysis.kind in ("tran", "dc"):
+                from ..solution import column_name
+
+                keep = [c for c in table.columns if not any(
+                    c.startswith(s + "_") or c == s for s in saves)]
+                first = table.columns[0]
+                table = table[[first] + [c for c in table.columns[1:] if c not in keep]]
+            csv = out_dir / f"{name}.csv"
+            table.to_csv(csv, index=False, float_format="%.9g")
+            files.append(str(csv))
+            if args.plot and analysis.kind == "tran":
+                png = out_dir / f"{name}.png"
+                result.plot(png, signals=saves or None)
+                files.append(str(png))
+            say(f"  .{analysis.kind}: wrote {csv}")
+            if analysis.kind == "tran" and not args.quiet and not args.json:
+                stats = dict(getattr(result, "stats", {}) or {})
+                if stats:
+                    shown = ", ".join(f"{k}={v}" for k, v in stats.items()
+                                      if isinstance(v, (int, float)))
+                    say(f"    stats: {shown}")
+        for m in d.measures:
+            v = res.measures.get(m.name)
+            unit = measure_unit(m)
+            line = f"  {m.name} = {_fmt(v)}" + (f" {unit}" if unit and v is not None else "")
+            if v is None:
+                line += f"  ({res.failures.get(m.name)})"
+            say(line)
+        report["steps"].append({"params": point, "measures": res.measures,
+                                "failures": res.failures, "files": files})
+        summary_rows.append({**point, **res.measures})
+    if deck.steps:
+        import pandas as pd
+
+        summary = out_dir / "meas_summary.csv"
+        pd.DataFrame(summary_rows).to_csv(summary, index=False, float_format="%.9g")
+        report["summary"] = str(summary)
+        say(f"wrote {summary}")
+        if deck.measures:
+            say(pd.DataFrame(summary_rows).to_string(index=False))
+    if args.json:
+        if not deck.steps:
+            only = report["steps"][0]
+            report.update(measures=only["measures"], failures=only["failures"],
+                          files=only["files"])
+            del report["steps"]
+        print(json.dumps(report, indent=2))
+    return 0
