@@ -26,7 +26,6 @@ from .errors import ParameterError, SourceSpan, TopologyError
 from .elements.base import ElementSpec
 from .options import SimulationOptions
 from .units import split_quantity, to_internal
-from .valve_params import ValveParams, paper_valve
 from .waveforms import Waveform, as_waveform
 
 REFERENCE_NODES = ("0", "gnd", "atm")
@@ -133,8 +132,7 @@ class Circuit:
 
     def valve(self, name, inlet, outlet, ctrl, model, backward=None, **kw):
         """Membrane valve; ``model`` is a ValveParams, a paper valve name or a flow model."""
-        return self.add("valve", name, (inlet, outlet, ctrl), model=resolve_valve_model(model),
-                        backward=resolve_valve_model(backward) if backward else None, **kw)
+        return self.add("valve", name, (inlet, outlet, ctrl), model=model, backward=backward, **kw)
 
     def set_initial(self, node: str, pressure) -> None:
         """Initial pressure of a node (netlist ``.ic``), kPa or a string with unit."""
@@ -190,15 +188,3 @@ class Circuit:
         from .simulate import operating_point
 
         return operating_point(self, **kwargs)
-
-
-def resolve_valve_model(model):
-    """A ValveParams, a named paper valve, a parameter dict, or a flow-model object."""
-    if isinstance(model, str):
-        return paper_valve(model)
-    if isinstance(model, dict):
-        return ValveParams(**model)
-    if isinstance(model, ValveParams) or callable(getattr(model, "flow", None)):
-        return model
-    raise ParameterError(f"a valve model must be a ValveParams, a paper valve name or an object "
-                         f"with a flow(p_in, p_out, p_ctrl) method, got {model!r}")

@@ -83,3 +83,15 @@ def paper_valve(name: str) -> ValveParams:
         raise ParameterError(f"unknown valve model {name!r}",
                              hint="known: " + ", ".join(sorted(PAPER_VALVES)))
     return PAPER_VALVES[key]
+
+
+def resolve_valve_model(model):
+    """A ValveParams, a named paper valve, a parameter dict, or a flow-model object."""
+    if isinstance(model, str):
+        return paper_valve(model)
+    if isinstance(model, dict):
+        return ValveParams(**model)
+    if isinstance(model, ValveParams) or callable(getattr(model, "flow", None)):
+        return model
+    raise ParameterError(f"a valve model must be a ValveParams, a paper valve name or an object "
+                         f"with a flow(p_in, p_out, p_ctrl) method, got {model!r}")

@@ -15,7 +15,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..laws import valve_delta_p, valve_flow_and_partials, valve_opening
-from ..valve_params import ValveParams
+from ..errors import ParameterError
+from ..valve_params import ValveParams, resolve_valve_model
 from . import register
 from .base import ElementFamily, Param
 
@@ -37,6 +38,18 @@ class MembraneValve(ElementFamily):
         "backward": Param("dimensionless", "ValveParams for flow out→in (default: model)",
                           kind="object", default=False),
     }
+
+    @classmethod
+    def check_spec(cls, spec):
+        try:
+            spec.params["model"] = resolve_valve_model(spec.params["model"])
+            if spec.params["backward"]:
+                spec.params["backward"] = resolve_valve_model(spec.params["backward"])
+        except ParameterError as err:
+            raise ParameterError(err.message, where=spec.where, hint=err.hint) from None
+        if spec.params["backward"] and not isinstance(spec.params["backward"], ValveParams):
+            raise ParameterError("a backward model must be a six-parameter ValveParams",
+                                 where=spec.where)
 
     def __init__(self, specs, context):
         super().__init__(specs, context)
