@@ -110,7 +110,7 @@ def _evaluate(function, frame):
     return mdot
 
 
-def simulate_bench(flow, *, protocol=None, noise_mdot=0.3, noise_rel=0.01, noise_p=0.5,
+def simulate_bench(flow, *, protocol=None, noise_mdot=0.2, noise_rel=0.01, noise_p=0.5,
                    setpoint_error=1.5, bias=0.0, regulator="paper", seed=0,
                    clip_negative=False, include_truth=True) -> pd.DataFrame:
     """Run a measurement protocol on a valve model and return the recorded data.

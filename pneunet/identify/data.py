@@ -157,8 +157,9 @@ def load_measurements(path_or_df, *, ambient_kpa=None, gauge=False, units=None, 
     keep = list(REQUIRED) + [c for c in OPTIONAL if c in raw.columns]
     extra = [c for c in raw.columns if c not in keep]
     frame = raw[keep + extra].copy()
-    frame.insert(0, "row", np.arange(1, len(frame) + 1))
-    if lines is not None:
+    if "row" not in frame:  # a frame loaded before keeps its source row numbers
+        frame.insert(0, "row", np.arange(1, len(frame) + 1))
+    if lines is not None and "line" not in frame:
         frame.insert(1, "line", lines[:len(frame)])
     if valve is not None:
         if "valve" not in frame:
