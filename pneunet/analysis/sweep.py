@@ -1,0 +1,476 @@
+"""Parameter sweeps: one table row per point, in parallel, resumable.
+
+Points
+    :func:`lin`, :func:`log`, :func:`values` make axes; :func:`grid` their product;
+    :func:`latin_hypercube` and :func:`monte_carlo` sample distributions such as
+    ``tolerance(96.42, 5)`` (p_close ± 5 kPa).  A point is a dict ``{name: value}``.
+Circuits
+    ``build(point) -> Circuit`` (a picklable function, e.g.
+    :func:`pneunet.analysis.circuits.oscillator`), or :class:`NetlistBuilder` for a
+    netlist whose ``.param`` values the point overrides.  Names of the form
+    ``ELEMENT.PARAM`` (``Rvent.R``, ``X1.pclose``, ``V1.V``) set an element or valve
+    model parameter of the built circuit directly, so any parameter can be swept.
+Analyses
+    ``analysis(circuit) -> dict`` of measurements; :class:`OscillationMeasure`
+    (default) classifies and times the oscillation at a node, :class:`DeckMeasure`
+    runs a netlist's own analyses and ``.meas`` statements.
+Execution
+    a local process pool over all cores by default; ``executor=`` any
+    ``concurrent.futures.Executor`` or a ``dask.distributed.Client`` (same results);
+    ``workers=1`` runs in this process.  A failing point is recorded with its error.
+    With ``store=PATH`` every finished point is appended to a JSON-lines file keyed
+    by the point, and a rerun computes only the points not yet in it.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import os
+import time
+import traceback
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Iterable, Sequence
+
+import numpy as np
+
+from ..errors import ParameterError, PneunetError
+
+
+# -- points ---------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Axis:
+    """One swept parameter and its values."""
+
+    name: str
+    values: tuple
+
+    def __post_init__(self):
+        object.__setattr__(self, "values", tuple(_plain(v) for v in self.values))
+
+
+def lin(name: str, start: float, stop: float, num: int) -> Axis:
+    """``num`` values evenly spaced from ``start`` to ``stop`` (inclusive)."""
+    return Axis(name, tuple(np.linspace(start, stop, int(num))))
+
+
+def log(name: str, start: float, stop: float, num: int) -> Axis:
+    """``num`` values evenly spaced in log from ``start`` to ``stop`` (both > 0)."""
+    if start <= 0 or stop <= 0:
+        raise ParameterError(f"a log sweep of {name} needs positive bounds, got {start}, {stop}")
+    return Axis(name, tuple(np.geomspace(start, stop, int(num))))
+
+
+def values(name: str, seq: Iterable) -> Axis:
+    """An explicit list of values."""
+    return Axis(name, tuple(seq))
+
+
+def grid(*axes: Axis) -> list[dict]:
+    """All combinations of the axes (the first varies slowest)."""
+    import itertools
+
+    names = [a.name for a in axes]
+    if len(set(names)) != len(names):
+        raise ParameterError(f"a parameter appears twice in the grid: {names}")
+    return [dict(zip(names, combo)) for combo in itertools.product(*(a.values for a in axes))]
+
+
+@dataclass(frozen=True)
+class Uniform:
+    low: float
+    high: float
+
+    def ppf(self, u):
+        return self.low + (self.high - self.low) * np.asarray(u)
+
+
+@dataclass(frozen=True)
+class Normal:
+    mean: float
+    sd: float
+
+    def ppf(self, u):
+        from scipy.stats import norm
+
+        return norm.ppf(np.asarray(u), self.mean, self.sd)
+
+
+def tolerance(nominal: float, plus_minus: float, dist: str = "uniform"):
+    """A fabrication tolerance nominal ± plus_minus: uniform over the interval, or normal
+    with the interval as ±2σ."""
+    if dist == "uniform":
+        return Uniform(nominal - plus_minus, nominal + plus_minus)
+    if dist == "normal":
+        return Normal(nominal, plus_minus / 2.0)
+    raise ParameterError(f"unknown distribution {dist!r}", hint="'uniform' or 'normal'")
+
+
+def latin_hypercube(dists: dict, n: int, seed: int = 0) -> list[dict]:
+    """``n`` points stratified in every parameter (scipy's Latin hypercube)."""
+    from scipy.stats import qmc
+
+    names = list(dists)
+    u = qmc.LatinHypercube(d=len(names), seed=seed).random(int(n))
+    cols = {k: dists[k].ppf(u[:, i]) for i, k in enumerate(names)}
+    return [{k: _plain(cols[k][j]) for k in names} for j in range(int(n))]
+
+
+def monte_carlo(dists: dict, n: int, seed: int = 0) -> list[dict]:
+    """``n`` independent random points."""
+    rng = np.random.default_rng(seed)
+    names = list(dists)
+    cols = {k: dists[k].ppf(rng.random(int(n))) for k in names}
+    return [{k: _plain(cols[k][j]) for k in names} for j in range(int(n))]
+
+
+def _plain(v):
+    if isinstance(v, (np.floating, float)):
+        return float(v)
+    if isinstance(v, (np.integer,)):
+        return int(v)
+    return v
+
+
+def point_key(point: dict) -> str:
+    """A stable key of a point (hash of its sorted items, floats at full precision)."""
+    text = json.dumps({k: _plain(v) for k, v in sorted(point.items())}, sort_keys=True,
+                      default=repr)
+    return hashlib.sha1(text.encode()).hexdigest()[:16]
+
+
+# -- circuits -----------------------------------------------------------------------------
+def apply_overrides(circuit, point: dict):
+    """Set ``ELEMENT.PARAM`` entries of ``point`` on ``circuit`` (in place; returns it)."""
+    import dataclasses
+
+    from ..valve_params import ValveParams
+
+    for key, value in point.items():
+        if "." not in key:
+            continue
+        name, param = key.split(".", 1)
+        if name not in circuit.elements:
+            raise ParameterError(f"sweep parameter {key}: no element {name!r}",
+                                 hint="elements: " + ", ".join(circuit.elements))
+        spec = circuit.elements[name]
+        model = spec.params.get("model")
+        if param not in spec.params and isinstance(model, ValveParams) and hasattr(model, param):
+            spec.params["model"] = dataclasses.replace(model, **{param: float(value)})
+        elif param in spec.params:
+            old = spec.params[param]
+            if hasattr(old, "level"):  # a constant waveform
+                from ..waveforms import as_waveform
+
+                spec.params[param] = as_waveform(float(value))
+            else:
+                spec.params[param] = float(value)
+        else:
+            raise ParameterError(f"sweep parameter {key}: {name} has no parameter {param!r}",
+                                 hint="parameters: " + ", ".join(spec.params))
+    return circuit
+
+
+class NetlistBuilder:
+    """``build(point)`` for a netlist: plain names override ``.param`` values, dotted
+    names set element parameters.  Uses the netlist package's ``parse_file``."""
+
+    def __init__(self, path, **options):
+        self.path = str(path)
+        self.options = options
+
+    def __call__(self, point: dict):
+        from ..netlist import parse_file
+
+        deck = parse_file(self.path, overrides={k: v for k, v in point.items() if "." not in k})
+        circuit = apply_overrides(deck.circuit, point)
+        if self.options:
+            circuit.options = circuit.options.replace(**self.options)
+        return circuit
+
+    def deck(self, point: dict | None = None):
+        from ..netlist import parse_file
+
+        return parse_file(self.path, overrides={k: v for k, v in (point or {}).items() if "." not in k})
+
+    def __repr__(self):
+        return f"NetlistBuilder({self.path!r})"
+
+
+def netlist_steps(path) -> list[dict]:
+    """The points of a netlist's ``.step`` statements ([{}] without any)."""
+    from ..netlist import parse_file
+
+    return parse_file(path).step_points()
+
+
+# -- analyses -----------------------------------------------------------------------------
+class OscillationMeasure:
+    """Oscillation at ``node``: kind, period, duty cycle, extremes.
+
+    With ``t_stop`` a single transient of that length is analysed; without it,
+    :func:`~pneunet.analysis.oscillation.oscillator_period` runs until the cycle has
+    converged (``rtol``) or ``t_max`` is reached.
+    """
+
+    def __init__(self, node: str = "tank", t_stop: float | None = None, rtol: float = 1e-4,
+                 t_initial: float = 20.0, t_max: float = 320.0, keep_trace: bool = False):
+        self.node, self.t_stop, self.rtol = node, t_stop, rtol
+        self.t_initial, self.t_max = t_initial, t_max
+
+    def __call__(self, circuit):
+        from .oscillation import analyze_oscillation, oscillator_period
+
+        if self.t_stop:
+            sol = circuit.tran(self.t_stop)
+            osc = analyze_oscillation(sol.t, sol.pressure(self.node), rtol=self.rtol)
+            t_sim = self.t_stop
+        else:
+            try:
+                res = oscillator_period(circuit, self.node, rtol=self.rtol,
+                                        t_initial=self.t_initial, t_max=self.t_max)
+            except PneunetError as err:
+                if getattr(err, "partial", None) is None:
+                    raise
+                res = err.partial
+            sol, osc, t_sim = res.solution, res.oscillation, res.t_simulated
+        out = osc.as_dict()
+        out["regime"] = ("oscillation" if osc.oscillating else
+                         "equilibrium" if osc.kind in ("equilibrium", "decaying") else "undetermined")
+        out["t_simulated"] = t_sim
+        return out, sol
+
+    def __repr__(self):
+        return f"OscillationMeasure(node={self.node!r}, t_stop={self.t_stop})"
+
+
+class DeckMeasure:
+    """Run a netlist's analyses and ``.meas`` statements (needs a :class:`NetlistBuilder`)."""
+
+    def __init__(self, builder: NetlistBuilder):
+        self.builder = builder
+
+    def __call__(self, circuit, point=None):
+        from ..netlist.runner import run_deck
+
+        deck = self.builder.deck(point)
+        deck.circuit = circuit
+        result = run_deck(deck)
+        sol = next((r for a, r in result.results if hasattr(r, "pressure")), None)
+        out = {k: (float(v) if v is not None else float("nan")) for k, v in result.measures.items()}
+        if result.failures:
+            out["meas_failures"] = json.dumps(result.failures)
+        return out, sol
+
+
+# -- running --------------------------------------------------------------------------
+def evaluate_point(build: Callable, analysis: Callable, point: dict, keep_trace: bool = False) -> dict:
+    """Build and analyse one point; never raises: errors are returned in the record."""
+    start = time.perf_counter()
+    record = {"key": point_key(point), "params": point, "result": {}, "error": None}
+    try:
+        circuit = build(point) if not isinstance(build, NetlistBuilder) else build(point)
+        if not isinstance(build, NetlistBuilder):
+            apply_overrides(circuit, point)
+        if isinstance(analysis, DeckMeasure):
+            out = analysis(circuit, point)
+        else:
+            out = analysis(circuit)
+        result, sol = out if isinstance(out, tuple) else (out, None)
+        record["result"] = {k: _plain(v) for k, v in result.items()}
+        if keep_trace and sol is not None:
+            record["trace"] = sol.to_pandas().to_dict(orient="list")
+    except Exception as exc:  # noqa: BLE001 - a failed point is data, not a crash
+        record["error"] = f"{type(exc).__name__}: {exc}"
+        if not isinstance(exc, PneunetError):
+            record["traceback"] = traceback.format_exc(limit=4)
+    record["elapsed_s"] = time.perf_counter() - start
+    return record
+
+
+@dataclass
+class SweepResult:
+    """A sweep's table (one row per point, input order), traces and run statistics."""
+
+    table: Any
+    traces: dict = field(default_factory=dict)
+    computed: int = 0
+    reused: int = 0
+    failed: int = 0
+    wall_time_s: float = 0.0
+    workers: int = 1
+
+    def to_csv(self, path):
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        self.table.to_csv(path, index=False)
+        return path
+
+
+def read_store(path) -> dict:
+    """Records of a JSON-lines store by key (a torn last line is ignored)."""
+    done = {}
+    path = Path(path)
+    if not path.exists():
+        return done
+    with path.open() as fh:
+        for line in fh:
+            line = line.strip()
+            if not line:
+                continue
+            try:
+                rec = json.loads(line)
+            except json.JSONDecodeError:
+                continue  # interrupted while writing this line
+            done[rec["key"]] = rec
+    return done
+
+
+def _is_dask(executor) -> bool:
+    return type(executor).__module__.split(".")[0] == "distributed"
+
+
+def run_sweep(build: Callable, points: Sequence[dict], analysis: Callable | None = None, *,
+              executor=None, workers: int | None = None, store=None, progress: bool = True,
+              keep_traces: bool = False, retry_failed: bool = False) -> SweepResult:
+    """Evaluate ``analysis(build(point))`` for every point; see the module docstring.
+
+    ``workers``: local processes (default: all cores; 1 = in this process);
+    ``executor``: a ``concurrent.futures`` executor or a ``dask.distributed.Client``;
+    ``store``: JSON-lines file for incremental results and resuming;
+    ``keep_traces``: keep each point's transient (as a DataFrame in ``result.traces``);
+    ``retry_failed``: recompute points recorded as failed in the store.
+    """
+    import pandas as pd
+
+    analysis = analysis or OscillationMeasure()
+    points = [{k: _plain(v) for k, v in p.items()} for p in points]
+    keys = [point_key(p) for p in points]
+    if len(set(keys)) != len(keys):
+        raise ParameterError("the sweep has duplicate points")
+    done = read_store(store) if store else {}
+    if retry_failed:
+        done = {k: r for k, r in done.items() if r.get("error") is None}
+    todo = [(k, p) for k, p in zip(keys, points) if k not in done
+            or (keep_traces and "trace" not in done[k] and not store)]
+    records = {k: done[k] for k in keys if k in done}
+    wall = time.perf_counter()
+    fh = None
+    if store:
+        Path(store).parent.mkdir(parents=True, exist_ok=True)
+        fh = open(store, "a")
+    bar = None
+    if progress:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=len(points), initial=len(points) - len(todo), unit="pt", desc="sweep")
+    traces = {}
+
+    def finish(rec):
+        trace = rec.pop("trace", None)
+        if trace is not None:
+            traces[rec["key"]] = pd.DataFrame(trace)
+        records[rec["key"]] = rec
+        if fh is not None:
+            fh.write(json.dumps(rec, default=_json_default) + "\n")
+            fh.flush()
+        if bar is not None:
+            bar.update(1)
+
+    n_workers = 1
+    own_pool = None
+    try:
+        if executor is None and (workers or os.cpu_count() or 1) > 1 and len(todo) > 1:
+            import multiprocessing
+            from concurrent.futures import ProcessPoolExecutor
+
+            n_workers = min(workers or os.cpu_count() or 1, len(todo))
+            own_pool = ProcessPoolExecutor(max_workers=n_workers,
+                                           mp_context=multiprocessing.get_context("fork"))
+            executor = own_pool
+        if executor is None:
+            for _, p in todo:
+                finish(evaluate_point(build, analysis, p, keep_traces))
+        elif _is_dask(executor):
+            from distributed import as_completed as dask_completed
+
+            n_workers = len(executor.scheduler_info().get("workers", {})) or 1
+            futures = [executor.submit(evaluate_point, build, analysis, p, keep_traces, pure=False)
+                       for _, p in todo]
+            try:
+                for fut in dask_completed(futures):
+                    finish(fut.result())
+            except BaseException:
+                executor.cancel(futures)
+                raise
+        else:
+            from concurrent.futures import as_completed
+
+            n_workers = getattr(executor, "_max_workers", n_workers)
+            futures = [executor.submit(evaluate_point, build, analysis, p, keep_traces)
+                       for _, p in todo]
+            try:
+                for fut in as_completed(futures):
+                    finish(fut.result())
+            except BaseException:
+                for f in futures:
+                    f.cancel()
+                raise
+    finally:
+        if own_pool is not None:
+            own_pool.shutdown(wait=True, cancel_futures=True)
+        if bar is not None:
+            bar.close()
+        if fh is not None:
+            fh.close()
+    table = records_table([records[k] for k in keys if k in records])
+    return SweepResult(table, traces, computed=len(todo), reused=len(points) - len(todo),
+                       failed=int(table["error"].notna().sum()) if len(table) else 0,
+                       wall_time_s=time.perf_counter() - wall, workers=n_workers)
+
+
+def records_table(records: list[dict]):
+    """One row per record: parameters, measurements, error, elapsed time, key."""
+    import pandas as pd
+
+    rows = []
+    for rec in records:
+        row = dict(rec["params"])
+        row.update(rec.get("result") or {})
+        row["error"] = rec.get("error")
+        row["elapsed_s"] = rec.get("elapsed_s")
+        row["key"] = rec["key"]
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def _json_default(o):
+    if isinstance(o, (np.floating,)):
+        return float(o)
+    if isinstance(o, (np.integer,)):
+        return int(o)
+    if isinstance(o, np.bool_):
+        return bool(o)
+    if isinstance(o, float) and not math.isfinite(o):
+        return None
+    return repr(o)
+
+
+def parse_axis(text: str) -> Axis:
+    """Parse a CLI axis ``NAME=lin:START:STOP:N``, ``log:..``, ``list:a,b,c`` or ``a,b,c``."""
+    if "=" not in text:
+        raise ParameterError(f"bad sweep axis {text!r}", hint="NAME=lin:0.2:2.5:20, NAME=log:1:10:5 "
+                                                               "or NAME=list:1,2,3")
+    name, spec = text.split("=", 1)
+    kind, _, rest = spec.partition(":")
+    try:
+        if kind in ("lin", "log"):
+            a, b, n = rest.split(":")
+            return (lin if kind == "lin" else log)(name, float(a), float(b), int(n))
+        if kind == "list":
+            return values(name, [float(x) for x in rest.split(",")])
+        return values(name, [float(x) for x in spec.split(",")])
+    except ValueError:
+        raise ParameterError(f"bad sweep axis {text!r}",
+                             hint="NAME=lin:START:STOP:N, NAME=log:START:STOP:N or NAME=list:a,b,c") from None
