@@ -463,6 +463,11 @@ class _Builder:
                            + ", ".join(elements.known_kinds())) from None
         n_ports = len(family.ports)
         full = prefix + name
+        if name[0].lower() == "x" and len(positional) > n_ports + 1 and \
+                isinstance(positional[-1], Word) and family.kind == "valve":
+            raise _err(f"undefined subcircuit {positional[-1].text!r}", positional[-1],
+                       _close(positional[-1].text.lower(), self.source.subckts) or
+                       "define it with .subckt NAME ports ... .ends")
         for it in positional[:n_ports]:
             if not isinstance(it, Word):
                 raise _err(f"{family.kind} {full}: expected node name, got {it}", it)

@@ -75,9 +75,9 @@ def evaluate(text: str, scope: Scope, span: SourceSpan, column: int | None = Non
         tree = lark_parser().parse(text, start="expr")
     except UnexpectedInput as err:
         col = getattr(err, "column", 1)
-        if col is None or col < 1:
-            col = len(text) + 1
         tok = getattr(err, "token", None)
+        if col is None or col < 1 or (tok is not None and tok.type == "$END"):
+            col = len(text) + 1
         what = "end of expression" if tok is not None and tok.type == "$END" else \
             f"{tok.value!r}" if tok is not None else repr(text[col - 1:col] or "end")
         raise NetlistError(f"syntax error in expression {{{text}}}: unexpected {what}",

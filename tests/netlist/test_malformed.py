@@ -1,0 +1,52 @@
+"""Each malformed netlist yields the right error at the right line and column, exit code 2."""
+import re
+from pathlib import Path
+
+import pytest
+
+from pneunet.cli import main
+from pneunet.errors import NetlistError, PneunetError
+from pneunet.netlist import parse_file
+
+CORPUS = sorted((Path(__file__).parent / "malformed").glob("*.pn"))
+HEADER = re.compile(r"^\* expect: (\d+):(\d+): (.+)$")
+
+
+def expectation(path):
+    m = HEADER.match(path.read_text().splitlines()[0])
+    assert m, f"{path.name}: first line must be '* expect: LINE:COL: substring'"
+    return int(m.group(1)), int(m.group(2)), m.group(3)
+
+
+def test_corpus_is_large_enough():
+    assert len(CORPUS) >= 30
+
+
+@pytest.mark.parametrize("path", CORPUS, ids=[p.stem for p in CORPUS])
+def test_error_line_column(path):
+    line, column, text = expectation(path)
+    with pytest.raises(PneunetError) as info:
+        deck = parse_file(path)
+        deck.circuit.validate()
+    err = info.value
+    assert isinstance(err, NetlistError), f"{type(err).__name__}: {err}"
+    assert err.span is not None
+    assert (err.span.line, err.span.column) == (line, column), err.report()
+    assert text in err.message or text in (err.hint or ""), err.report()
+    # the report points at the offending line with a caret
+    report = err.report()
+    assert f"{path}:{line}:{column}: error:" in report
+    assert report.splitlines()[2].index("^") == 4 + column - 1
+
+
+@pytest.mark.parametrize("path", CORPUS, ids=[p.stem for p in CORPUS])
+def test_cli_exit_code_2(path, capsys, tmp_path):
+    line, column, _ = expectation(path)
+    assert main(["run", str(path), "-o", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert f":{line}:{column}: error:" in err
+    assert "Traceback" not in err
+
+
+def test_check_exit_code_2(capsys):
+    assert main(["check", str(CORPUS[0])]) == 2
