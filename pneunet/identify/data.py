@@ -243,7 +243,7 @@ def load_measurements(path_or_df, *, ambient_kpa=None, gauge=False, units=None, 
         if lines is not None:
             where += " (file lines " + _rows_text(frame.loc[mask, "line"].to_numpy()) + ")"
         if on_invalid == "raise":
-            hint = {"p_in": "the input port must be the higher-pressure port; swap the columns "
+            hint = {"p_in ": "the input port must be the higher-pressure port; swap the columns "
                             "for backward flow, or exclude these rows",
                     "dupli": "remove the repeated rows",
                     "NaN i": "fill the gaps",

@@ -128,7 +128,7 @@ def fig7_flow_surface(fit, p_in=396.0, path=None):
     ax.set_ylabel("p_ctrl [kPa]")
     ax.set_zlabel("ṁ [mg/s]")
     ax.set_title(f"A: flow at p_in ≈ {level:.0f} kPa (dots data, surface model)", fontsize=9)
-    ax.view_init(elev=25, azim=-130)
+    ax.view_init(elev=25, azim=-120)
     ax2 = fig.add_subplot(1, 2, 2, projection="3d")
     ax2.plot_surface(go, gc, np.zeros_like(go), color="gray", alpha=0.2, linewidth=0)
     ax2.scatter(pout, pctrl, error, color=OPEN, s=6, depthshade=False)
@@ -171,7 +171,7 @@ def fig8_areas(fit, table=None, path=None):
     return _finish(fig, path)
 
 
-def fig9_seat_height(values, trends, path=None):
+def fig9_seat_height(values, trends, path=None, *, title=None):
     """Fig. 9: each parameter against seat height with its linear trend."""
     from .fit import NAMES
     from ..valve_params import VALVE_PARAMETERS
@@ -192,7 +192,8 @@ def fig9_seat_height(values, trends, path=None):
         ax.set_xlabel("seat height h_seat [mm]")
         ax.legend(fontsize=7)
         ax.grid(alpha=0.3)
-    fig.suptitle("Parameters against seat height, linear least-squares trends", fontsize=10)
+    fig.suptitle(title or "Parameters against seat height, linear least-squares trends",
+                 fontsize=10)
     fig.tight_layout()
     return _finish(fig, path)
 
