@@ -49,7 +49,10 @@ def available_backends() -> dict:
         out["sksundae"] = SundaeIntegrator
     if importlib.util.find_spec("scikits") is not None and \
             importlib.util.find_spec("scikits.odes") is not None:
-        from .odes import OdesIntegrator
-
-        out["odes"] = OdesIntegrator
+        try:
+            from .odes import OdesIntegrator
+        except ModuleNotFoundError:  # binding installed, pneunet adapter not present
+            pass
+        else:
+            out["odes"] = OdesIntegrator
     return out
