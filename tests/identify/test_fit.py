@@ -1,0 +1,144 @@
+"""Two-stage identification: round trips on bench data, figures of merit, outputs."""
+import json
+import re
+
+import numpy as np
+import pytest
+
+from pneunet.errors import DataError
+from pneunet.identify import fit_valve, simulate_bench
+from pneunet.identify.fit import NAMES, auto_mdot_min
+from pneunet.valve_params import PAPER_VALVES, ValveParams
+
+
+@pytest.mark.parametrize("name", ["axi", "mirror_forward", "mirror_backward"])
+def test_round_trip_paper_valves(fitted, name):
+    """Done-criterion 1: realistic bench data (4410 points) fitted back."""
+    truth = PAPER_VALVES[name]
+    fit = fitted(name, mdot_min="auto")
+    assert fit.metrics["n"] == 4410
+    for k in NAMES:
+        lo, hi = fit.ci95[k]
+        assert lo <= getattr(truth, k) <= hi, (k, getattr(fit.params, k), fit.ci95[k])
+        assert fit.stderr[k] > 0
+    assert fit.params.Rf == pytest.approx(truth.Rf, rel=0.03)
+    assert fit.params.ain + fit.params.aout == pytest.approx(truth.ain + truth.aout, rel=0.03)
+    assert abs(fit.params.pclose - truth.pclose) < 5.0
+
+
+def test_paper_threshold_fixed_at_one_mg_s(fitted):
+    """With the paper's defaults (ṁ_min 1 mg/s, C 0.1) the same criteria hold for axi."""
+    truth = PAPER_VALVES["axi"]
+    fit = fitted("axi")
+    assert fit.mdot_min == 1.0 and fit.C == 0.1
+    for k in NAMES:
+        lo, hi = fit.ci95[k]
+        assert lo <= getattr(truth, k) <= hi, k
+    assert abs(fit.params.pclose - truth.pclose) < 5.0
+
+
+def test_threshold_correction_removes_the_paper_procedures_bias(fitted):
+    """Without the correction, stage 1 puts p_close a few kPa high and e comes out low."""
+    truth = PAPER_VALVES["axi"]
+    paper = fitted("axi", correct_threshold=False)
+    corrected = fitted("axi")
+    assert 1.5 < paper.params.pclose - truth.pclose < 6.0
+    assert abs(corrected.params.pclose - truth.pclose) < abs(paper.params.pclose - truth.pclose)
+    assert abs(corrected.params.e - truth.e) < abs(paper.params.e - truth.e)
+
+
+def test_clean_data_misclassification_and_rmse_at_the_noise_level():
+    """Done-criterion 2."""
+    truth = PAPER_VALVES["axi"]
+    clean = simulate_bench(truth, noise_mdot=0, noise_rel=0, noise_p=0, setpoint_error=0)
+    fit = fit_valve(clean, n_boot=20)
+    assert fit.metrics["misclassified"] < 0.01 * 4410
+    assert fit.metrics["rmse"] < 0.5  # lattice-limited identification, 0.06 % of max flow
+    for k in NAMES:
+        assert getattr(fit.params, k) == pytest.approx(getattr(truth, k), rel=0.01, abs=0.5)
+    noisy = simulate_bench(truth, noise_mdot=2.0, noise_rel=0, noise_p=0, setpoint_error=0,
+                           seed=7)
+    fit = fit_valve(noisy, mdot_min="auto", n_boot=20)
+    assert fit.metrics["misclassified"] < 0.01 * 4410
+    assert fit.metrics["rmse"] == pytest.approx(2.0, rel=0.05)
+    assert fit.metrics["rmse_open"] == pytest.approx(2.0, rel=0.1)
+    assert "RMSE flow        = 2.0" in fit.report() or "RMSE flow        = 1.9" in fit.report()
+
+
+def test_auto_mdot_min_follows_the_closed_point_noise():
+    rng = np.random.default_rng(0)
+    closed = 0.3 * rng.standard_normal(3000)
+    opened = rng.uniform(20, 800, 1200)
+    threshold, centre, sigma = auto_mdot_min(np.concatenate([closed, opened]))
+    assert sigma == pytest.approx(0.3, rel=0.1)
+    assert abs(centre) < 0.05
+    assert threshold == pytest.approx(1.5, rel=0.15)
+
+
+def test_outputs_json_report_and_predict(fitted, bench):
+    fit = fitted("axi", mdot_min="auto")
+    out = json.loads(json.dumps(fit.to_json()))
+    assert set(out["params"]) == set(NAMES)
+    for k in NAMES:
+        assert {"value", "stderr"} <= set(out["params"][k])
+    assert {"rmse", "rmse_open", "misclassified", "n", "n_open"} <= set(out["metrics"])
+    text = fit.report()
+    for k in NAMES:
+        assert re.search(rf"^\s+{k}\s*= .*\+/- .*95% CI", text, re.M), k
+    assert "misclassified" in text and "RMSE 1/R" in text
+    data = bench("axi")
+    error = fit.predict(data) - data["mdot_true_mg_s"]
+    assert np.sqrt(np.mean(error ** 2)) < 10.0  # measured pressures carry sensor noise
+    assert fit.metrics["rmse_inv_r"] > 0 and fit.misclassified.dtype == bool
+    assert fit.open.sum() == fit.metrics["n_open"]
+
+
+def _parse_card(card):
+    m = re.fullmatch(r"\.model (\S+) VALVE\((.*)\)", card.strip())
+    assert m, card
+    values = dict(item.split("=") for item in m.group(2).split())
+    return m.group(1), ValveParams(**{k: float(v) for k, v in values.items()})
+
+
+def test_model_card_round_trips_into_the_same_flows(fitted, bench):
+    """Done-criterion 3, part 1: card text -> ValveParams -> the fit's flows."""
+    fit = fitted("axi", mdot_min="auto")
+    name, params = _parse_card(fit.model_card("AXI_FIT"))
+    assert name == "AXI_FIT"
+    from pneunet.laws import valve_flow
+
+    data = bench("axi")
+    flows = valve_flow(data["p_in_kPa"], data["p_out_kPa"], data["p_ctrl_kPa"],
+                       **params.as_dict())
+    np.testing.assert_allclose(flows, fit.predict(data), rtol=1e-4, atol=1e-3)
+
+
+@pytest.mark.parametrize("p_in, p_out, p_ctrl", [(396.0, 221.0, 96.0), (596.0, 346.0, 246.0),
+                                                 (296.0, 121.0, 171.0)])
+def test_model_card_in_a_netlist_simulates_the_fits_flows(fitted, p_in, p_out, p_ctrl):
+    """Done-criterion 3, part 2: the card pasted into a netlist, operating point."""
+    netlist = pytest.importorskip("pneunet.netlist")
+    from pneunet.simulate import operating_point
+
+    fit = fitted("axi", mdot_min="auto")
+    text = "\n".join([
+        "* valve on three pressure sources",
+        fit.model_card("AXI_FIT"),
+        f"Pin a {p_in}kPa",
+        f"Pout b {p_out}kPa",
+        f"Pctrl c {p_ctrl}kPa",
+        "X1 a b c AXI_FIT",
+        ".op",
+    ])
+    deck = netlist.parse_netlist(text)
+    op = operating_point(deck.circuit)
+    expected = float(fit.predict({"p_in_kPa": [p_in], "p_out_kPa": [p_out],
+                                  "p_ctrl_kPa": [p_ctrl]})[0])
+    assert op.flows["X1"] == pytest.approx(expected, rel=1e-3, abs=1e-2)
+
+
+def test_data_without_a_boundary_is_refused(bench):
+    data = bench("axi").copy()
+    data["mdot_mg_s"] = 0.0
+    with pytest.raises(DataError, match="all 4410 points are labelled closed"):
+        fit_valve(data)
