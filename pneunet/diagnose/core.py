@@ -201,6 +201,22 @@ def diagnose(data, *, effects=None, n_splits=5, z=3.0, min_gain=0.02, max_effect
     start : ValveParams or ValveModel, optional
         Starting model instead of the issue-4 identification.
     """
+    import scipy.linalg  # noqa: F401 — load the BLAS/LAPACK libraries before limiting them
+    import scipy.optimize  # noqa: F401
+    import sklearn.ensemble  # noqa: F401
+    from threadpoolctl import threadpool_limits
+
+    # BLAS/OpenMP threads make the many small SVDs and tree fits here 10-50x
+    # slower on a shared machine; everything below is single-threaded.
+    with threadpool_limits(1):
+        return _diagnose(data, effects=effects, n_splits=n_splits, z=z, min_gain=min_gain,
+                         max_effects=max_effects, mdot_min=mdot_min, screen_gain=screen_gain,
+                         progress=progress, seed=seed, start=start,
+                         load_options=load_options)
+
+
+def _diagnose(data, *, effects, n_splits, z, min_gain, max_effects, mdot_min, screen_gain,
+              progress, seed, start, load_options):
     from tqdm.auto import tqdm
 
     frame = _as_frame(data, load_options or {})

@@ -106,7 +106,7 @@ def feature_table(df: pd.DataFrame, model, pred: np.ndarray) -> pd.DataFrame:
         "sweep": df["sweep"].to_numpy(float)})
 
 
-def noise_floor(df: pd.DataFrame, resid: np.ndarray, pred: np.ndarray, n_bins=6) -> dict:
+def noise_floor(df: pd.DataFrame, resid: np.ndarray, pred: np.ndarray, n_bins=8) -> dict:
     """Measurement noise estimated from the data alone (no model truth needed).
 
     Second differences of the residuals along each sweep, r[i−1] − 2r[i] + r[i+1],
@@ -126,7 +126,14 @@ def noise_floor(df: pd.DataFrame, resid: np.ndarray, pred: np.ndarray, n_bins=6)
         return {"rmse": float("nan"), "bins": []}
     d2 = r[idx - 1] - 2 * r[idx] + r[idx + 1]
     m = np.abs(pred[idx])
-    edges = np.unique(np.quantile(m, np.linspace(0, 1, n_bins + 1)))
+    mp = np.abs(pred)
+    closed_cut = 1.0
+    op = m > closed_cut
+    edges = [0.0, closed_cut]
+    if op.sum() >= 20:
+        q = np.quantile(m[op], np.linspace(0, 1, n_bins + 1))[1:]
+        edges += list(q)
+    edges = np.unique(np.array(edges + [max(mp.max(), m.max()) + 1.0]))
     which = np.clip(np.searchsorted(edges, m, side="right") - 1, 0, len(edges) - 2)
     sig_bin, bins = {}, []
     for b in range(len(edges) - 1):
@@ -136,8 +143,8 @@ def noise_floor(df: pd.DataFrame, resid: np.ndarray, pred: np.ndarray, n_bins=6)
         s = 1.4826 * np.median(np.abs(d2[sel])) / np.sqrt(6.0)
         sig_bin[b] = s
         bins.append((float(edges[b]), float(edges[b + 1]), float(s), int(sel.sum())))
-    # assign each point the sigma of its flow bin
-    mp = np.abs(pred)
+    if not sig_bin:
+        return {"rmse": float("nan"), "bins": []}
     wall = np.clip(np.searchsorted(edges, mp, side="right") - 1, 0, len(edges) - 2)
     known = np.array(sorted(sig_bin))
     nearest = known[np.abs(known[None, :] - wall[:, None]).argmin(axis=1)]

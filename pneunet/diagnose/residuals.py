@@ -17,6 +17,7 @@ def residual_structure(features: pd.DataFrame, resid: np.ndarray, folds, boot, *
     [(feature, share)] from out-of-fold permutation importance, most important first.
     """
     from sklearn.ensemble import HistGradientBoostingRegressor
+    from threadpoolctl import threadpool_limits
 
     cols = [c for c in MODEL_FEATURES if c in features and features[c].nunique() > 1]
     X = features[cols].to_numpy(float)
@@ -28,14 +29,15 @@ def residual_structure(features: pd.DataFrame, resid: np.ndarray, folds, boot, *
         hgb = HistGradientBoostingRegressor(max_iter=80, learning_rate=0.1, max_leaf_nodes=15,
                                             min_samples_leaf=30, l2_regularization=1.0,
                                             early_stopping=False, random_state=seed)
-        hgb.fit(X[train], r[train])
-        Xt = X[test]
-        oof[test] = hgb.predict(Xt)
-        base = np.mean((r[test] - oof[test]) ** 2)
-        for j in range(len(cols)):
-            Xp = Xt.copy()
-            Xp[:, j] = Xp[rng.permutation(len(test)), j]
-            incr[j] += (np.mean((r[test] - hgb.predict(Xp)) ** 2) - base) * len(test)
+        with threadpool_limits(1):  # OpenMP threads on shared cores cost 50x here
+            hgb.fit(X[train], r[train])
+            Xt = X[test]
+            oof[test] = hgb.predict(Xt)
+            base = np.mean((r[test] - oof[test]) ** 2)
+            for j in range(len(cols)):
+                Xp = Xt.copy()
+                Xp[:, j] = Xp[rng.permutation(len(test)), j]
+                incr[j] += (np.mean((r[test] - hgb.predict(Xp)) ** 2) - base) * len(test)
     incr = np.maximum(incr / len(r), 0.0)
     share = incr / incr.sum() if incr.sum() > 0 else np.full(len(cols), 1.0 / max(len(cols), 1))
     order = np.argsort(-share)
