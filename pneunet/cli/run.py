@@ -31,7 +31,7 @@ def _fmt(v):
 
 def main(args) -> int:
     from ..netlist import parse_file
-    from ..netlist.runner import measure_unit, run_deck
+    from ..netlist.runner import RunResult, evaluate_measures, measure_unit, run_analysis
 
     path = Path(args.netlist)
     deck = parse_file(path)
@@ -50,17 +50,17 @@ def main(args) -> int:
             d.circuit.validate()
             say("step " + str(i) + ": " + ", ".join(f"{k}={v:g}" for k, v in point.items()))
         tag = f"_step{i}" if point else ""
-        res = run_deck(d, progress=progress)
+        res = RunResult(d)
         files = []
         counts: dict[str, int] = {}
-        for analysis, result in res.results:
+        for analysis in d.analyses:  # write each result as soon as it exists
+            result = run_analysis(d, analysis, progress)
+            res.results.append((analysis, result))
             counts[analysis.kind] = counts.get(analysis.kind, 0) + 1
             suffix = "" if counts[analysis.kind] == 1 else str(counts[analysis.kind])
             name = f"{analysis.kind}{suffix}{tag}"
             table = result.to_pandas()
             if saves and analysis.kind in ("tran", "dc"):
-                from ..solution import column_name
-
                 keep = [c for c in table.columns if not any(
                     c.startswith(s + "_") or c == s for s in saves)]
                 first = table.columns[0]
@@ -79,6 +79,7 @@ def main(args) -> int:
                     shown = ", ".join(f"{k}={v}" for k, v in stats.items()
                                       if isinstance(v, (int, float)))
                     say(f"    stats: {shown}")
+        res.measures, res.failures = evaluate_measures(d.measures, res.results)
         for m in d.measures:
             v = res.measures.get(m.name)
             unit = measure_unit(m)
