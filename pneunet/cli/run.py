@@ -30,6 +30,7 @@ def _fmt(v):
 
 
 def main(args) -> int:
+    from ..errors import SolverError
     from ..netlist import parse_file
     from ..netlist.runner import RunResult, evaluate_measures, measure_unit, run_analysis
 
@@ -44,6 +45,7 @@ def main(args) -> int:
     saves = [s.key for s in deck.saves]
     report = {"netlist": str(path), "output": str(out_dir), "steps": []}
     summary_rows = []
+    status = 0
     for i, point in enumerate(points, 1):
         d = deck.variant(point) if point else deck
         if point:
@@ -54,7 +56,15 @@ def main(args) -> int:
         files = []
         counts: dict[str, int] = {}
         for analysis in d.analyses:  # write each result as soon as it exists
-            result = run_analysis(d, analysis, progress)
+            try:
+                result = run_analysis(d, analysis, progress)
+            except SolverError as err:
+                if not deck.steps:
+                    raise
+                # one failed step does not stop the sweep; the exit code says it failed
+                print(f"step {i}: {err.report()}", file=sys.stderr)
+                status = 1
+                break
             res.results.append((analysis, result))
             counts[analysis.kind] = counts.get(analysis.kind, 0) + 1
             suffix = "" if counts[analysis.kind] == 1 else str(counts[analysis.kind])
@@ -106,4 +116,4 @@ def main(args) -> int:
                           files=only["files"])
             del report["steps"]
         print(json.dumps(report, indent=2))
-    return 0
+    return status
