@@ -360,7 +360,7 @@ def _labels(mdot, mdot_min):
     return np.where(mdot > mdot_min, 1, -1)
 
 
-def fit_valve(data, *, mdot_min=1.0, C=0.1, correct_threshold=True, n_boot=200, seed=0,
+def fit_valve(data, *, mdot_min=1.0, C=0.1, correct_threshold=True, n_boot=100, seed=0,
               **load_options) -> ValveFit:
     """Identify the six parameters from static measurements (two stages, eqs. 20–24).
 
