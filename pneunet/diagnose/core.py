@@ -173,8 +173,8 @@ def _structure_json(s):
 
 
 def diagnose(data, *, effects=None, n_splits=5, z=3.0, min_gain=0.02, max_effects=3,
-             mdot_min=1.0, screen_gain=0.005, progress=True, seed=0, start=None,
-             load_options=None) -> Diagnosis:
+             mdot_min=1.0, screen_gain=0.005, coverage=0.6, progress=True, seed=0,
+             start=None, load_options=None) -> Diagnosis:
     """Diagnose a valve model against measured data.
 
     Parameters
@@ -193,6 +193,11 @@ def diagnose(data, *, effects=None, n_splits=5, z=3.0, min_gain=0.02, max_effect
         At most this many effects are accepted.
     mdot_min : float
         Flow (mg/s) above which a point counts as open (rmse_open, misclassified).
+    coverage : float
+        When the learned residual model finds structure, an effect must remove at
+        least this fraction of the RMSE the residual model removes (otherwise it
+        is a partial look-alike of an effect the library does not know).  An
+        effect whose fit ends at a parameter bound is never accepted.
     screen_gain : float
         A candidate is cross-validated only if its full-data refit lowers the
         RMSE by more than this fraction (a CV gain can hardly exceed it otherwise).
@@ -211,12 +216,12 @@ def diagnose(data, *, effects=None, n_splits=5, z=3.0, min_gain=0.02, max_effect
     with threadpool_limits(1):
         return _diagnose(data, effects=effects, n_splits=n_splits, z=z, min_gain=min_gain,
                          max_effects=max_effects, mdot_min=mdot_min, screen_gain=screen_gain,
-                         progress=progress, seed=seed, start=start,
+                         coverage=coverage, progress=progress, seed=seed, start=start,
                          load_options=load_options)
 
 
 def _diagnose(data, *, effects, n_splits, z, min_gain, max_effects, mdot_min, screen_gain,
-              progress, seed, start, load_options):
+              coverage, progress, seed, start, load_options):
     from tqdm.auto import tqdm
 
     frame = _as_frame(data, load_options or {})
@@ -227,7 +232,7 @@ def _diagnose(data, *, effects, n_splits, z, min_gain, max_effects, mdot_min, sc
     folds = group_folds(df["group"].to_numpy(), n_splits)
     boot = group_bootstrap_weights(df["group"].to_numpy(), seed=seed)
     settings = {"n_splits": len(folds), "z": z, "min_gain": min_gain, "max_effects": max_effects,
-                "mdot_min": mdot_min, "screen_gain": screen_gain,
+                "mdot_min": mdot_min, "screen_gain": screen_gain, "coverage": coverage,
                 "candidates": [c.id for c in cands]}
     n_dir = len(np.unique(df["sweep"]))
     bar = tqdm(total=3 + len(cands) * (1 + max_effects), desc="diagnose", unit="step",
@@ -268,14 +273,38 @@ def _diagnose(data, *, effects, n_splits, z, min_gain, max_effects, mdot_min, sc
             if best is not None:
                 _equivalents(best, rnd, boot)
             rounds.append(rnd)
-            if best is None or not _passes(best.gain, best.gain_se, current.cv_rmse, z, min_gain):
-                if best is not None:
-                    best.reason = best.reason or (
-                        f"gain {best.gain:.3g} ± {best.gain_se:.2g} mg/s does not pass "
-                        f"(needs > {z:g} s.e. and > {100 * min_gain:g} % of {current.cv_rmse:.3g})")
+            chosen, partial = None, []
+            for c in rnd:
+                if not c.screened:
+                    continue
+                if not _passes(c.gain, c.gain_se, current.cv_rmse, z, min_gain):
+                    c.reason = (f"gain {c.gain:.3g} ± {c.gain_se:.2g} mg/s does not pass "
+                                f"(needs > {z:g} s.e. and > {100 * min_gain:g} % of "
+                                f"{current.cv_rmse:.3g})")
+                    continue
+                at = _at_bound(c)
+                if at:
+                    c.reason = (f"fits only with {at} at its bound: the data want more than "
+                                "this effect can give (probably a different effect)")
+                    continue
+                st = current.structure
+                if st["learnable"] and c.gain < coverage * st["gain"]:
+                    c.reason = (f"explains only {100 * c.gain / st['gain']:.0f} % of the "
+                                f"structure a flexible model learns ({st['gain']:.3g} mg/s); "
+                                f"needs {100 * coverage:.0f} % alone or with a second effect")
+                    partial.append(c)
+                    continue
+                chosen = c
                 break
+            if chosen is None and len(partial) >= 2 and len(stages) < max_effects:
+                chosen = _try_pairs(partial[:3], current, df, inputs, folds, boot, z,
+                                    min_gain, coverage, bar)
+            if chosen is None:
+                break
+            best = chosen
             best.accepted = True
-            best.reason = "accepted"
+            best.reason = "accepted" + (f"; {best.reason}" if best.reason.startswith("with")
+                                        else "")
             bar.set_postfix_str(f"accepted {best.effect}")
             new = _make_stage(best.effect, best.fit, best._cv, df, inputs, y, boot, mdot_min)
             _localise(new, df, folds, boot, z, min_gain, mdot_min, seed)
@@ -287,6 +316,8 @@ def _diagnose(data, *, effects, n_splits, z, min_gain, max_effects, mdot_min, sc
     if n_dir < 2 and any("sweep" in e.needs for e in cands):
         notes.append("only one sweep direction in the data: hysteresis cannot be told from a "
                      "shift of p_close (measure rising and falling p_ctrl sweeps)")
+    # re-estimate the noise floor under the final model (less misfit to cancel)
+    noise = noise_floor(df, stages[-1].resid, stages[-1].pred)
     unexplained = bool(stages[-1].structure["learnable"])
     adequate = len(stages) == 1 and not unexplained
     ident = None
@@ -339,9 +370,47 @@ def _localise(stage, df, folds, boot, z, min_gain, mdot_min, seed):
                              z, min_gain)
     stage.structure = s
     top = [f for f, _ in s["importance"]]
+    stage.features = feats
+    if not s["learnable"]:
+        stage.regions = []
+        return
     stage.regions = regions(feats, stage.resid, stage.pred, df["group"].to_numpy(), top,
                             mdot_min=mdot_min)
     stage.features = feats
+
+
+def _try_pairs(partial, current, df, inputs, folds, boot, z, min_gain, coverage, bar):
+    """Two partial look-alikes may be two real effects: accept the better one if the
+    pair together passes the coverage rule (the other is then found next round)."""
+    best_pair = None
+    for i in range(len(partial)):
+        for j in range(i + 1, len(partial)):
+            a, b = partial[i], partial[j]
+            bar.set_postfix_str(f"pair {a.effect}+{b.effect}")
+            start = a.fit.model.with_effect(b.fit.model.effect(b.effect))
+            fit = fit_model(df, start, inputs=inputs)
+            cv = cross_validate(df, fit.model, folds, inputs=inputs)
+            gain, se = rmse_diff_ci(current.oof_sq, cv.sq, boot)
+            if (_passes(gain, se, current.cv_rmse, z, min_gain)
+                    and gain >= coverage * current.structure["gain"]
+                    and (best_pair is None or gain > best_pair[0])):
+                best_pair = (gain, se, a, b)
+    if best_pair is None:
+        return None
+    gain, se, a, b = best_pair
+    a.reason = (f"with {b.effect} explains {100 * gain / current.structure['gain']:.0f} % of "
+                f"the learnable structure (pair gain {gain:.3g} ± {se:.2g} mg/s)")
+    return a
+
+
+def _at_bound(c, tol=0.005):
+    eff = c.fit.model.effect(c.effect)
+    for k, p in eff.params.items():
+        v = eff.values[k]
+        for bound in (p.lo, p.hi):
+            if bound != p.null and abs(v - bound) <= tol * (p.hi - p.lo):
+                return f"{c.effect}.{k} = {v:.4g} {p.unit}"
+    return ""
 
 
 def _passes(gain, se, ref, z, min_gain):

@@ -49,17 +49,20 @@ def residual_structure(features: pd.DataFrame, resid: np.ndarray, folds, boot, *
 
 
 def binned_map(x, y, r, nx=8, ny=8, min_count=5):
-    """Mean residual and its standard error in an nx × ny grid of quantile bins.
+    """Mean residual and its standard error in an nx × ny grid of equal-width bins
+    (a feature with two values, like the sweep direction, gets two bins).
 
     Returns (x_edges, y_edges, mean, se, count); bins with fewer than
     ``min_count`` points are NaN.
     """
     def edges(v, n):
-        e = np.unique(np.quantile(v, np.linspace(0, 1, n + 1)))
-        if len(e) < 2:
-            e = np.array([v.min() - 0.5, v.max() + 0.5])
-        return e
+        u = np.unique(v)
+        if len(u) <= 3:
+            mids = (u[1:] + u[:-1]) / 2 if len(u) > 1 else np.array([])
+            return np.concatenate([[u[0] - 0.5], mids, [u[-1] + 0.5]])
+        return np.linspace(v.min(), v.max() + 1e-9 * (abs(v.max()) + 1), n + 1)
 
+    x, y, r = (np.asarray(a, float) for a in (x, y, r))
     ex, ey = edges(x, nx), edges(y, ny)
     ix = np.clip(np.searchsorted(ex, x, side="right") - 1, 0, len(ex) - 2)
     iy = np.clip(np.searchsorted(ey, y, side="right") - 1, 0, len(ey) - 2)
@@ -131,7 +134,7 @@ def regions(features: pd.DataFrame, resid: np.ndarray, pred: np.ndarray, groups,
         verb = "under-predicted" if mean > 0 else "over-predicted"
         if flow > 10 * mdot_min:
             pct, pct_se = 100 * abs(mean) / flow, 100 * se / flow
-            amount = (f"{pct:.0f} ± {max(pct_se, 0.5):.0f} % ({abs(mean):.1f} ± {se:.1f} mg/s, "
+            amount = (f"{pct:.1f} ± {pct_se:.1f} % ({abs(mean):.1f} ± {se:.1f} mg/s, "
                       f"{len(r)} points)")
         else:
             amount = f"{abs(mean):.2f} ± {se:.2f} mg/s ({len(r)} points)"

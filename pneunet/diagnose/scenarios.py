@@ -49,7 +49,7 @@ LIBRARY_SCENARIOS = {
     "laminar": {"K": 10.0},
     "internal-drop": {"lam": 0.5},
     "hysteresis": {"h": 10.0},
-    "pressure-offset": {"p0": 10.0},
+    "pressure-offset": {"p0": 30.0},
 }
 
 
@@ -119,3 +119,22 @@ def achievable_floor(truth, data) -> float:
     was given (flow noise plus pressure noise propagated through the law)."""
     pred = np.asarray(truth(data[["time_s", "p_in_kPa", "p_out_kPa", "p_ctrl_kPa", "sweep"]]))
     return float(np.sqrt(np.mean((pred - data["mdot_mg_s"].to_numpy(float)) ** 2)))
+
+
+def scenario_truth(name):
+    """Truth for a scenario name: 'clean', a library id, 'a+b', or an unlisted name."""
+    if name in UNLISTED_SCENARIOS:
+        return UNLISTED_SCENARIOS[name]
+    if name == "clean":
+        return truth_model()
+    return truth_model([(n, LIBRARY_SCENARIOS[n]) for n in name.split("+")])
+
+
+def run_scenario(name, *, seed=0, reduced=False, **diagnose_options):
+    """Bench data for scenario ``name``, diagnosed; returns (diagnosis, floor, data)."""
+    from . import diagnose
+
+    truth = scenario_truth(name)
+    data = bench(truth, reduced=reduced, seed=seed)
+    diagnose_options.setdefault("progress", False)
+    return diagnose(data, **diagnose_options), achievable_floor(truth, data), data

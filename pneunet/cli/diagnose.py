@@ -1,0 +1,79 @@
+"""``pneunet diagnose DATA.csv``: where the valve model fails and which effect is missing."""
+from __future__ import annotations
+
+import json
+import sys
+
+
+def register(subparsers):
+    p = subparsers.add_parser(
+        "diagnose", help="compare the valve model with measurements and name the missing effect",
+        description="Fit the six-parameter valve model to static bench data, localise the "
+                    "residuals, screen candidate physical effects under cross-validation "
+                    "grouped by sweep, add those that clearly help, and report honestly "
+                    "(adequate / unexplained).")
+    p.add_argument("data", help="CSV in the format of DATA-FORMAT.md (sweep column optional)")
+    p.add_argument("--effects", nargs="+", metavar="ID",
+                   help="candidate effect ids (default: all registered effects)")
+    p.add_argument("--plugin", action="append", default=[], metavar="MODULE",
+                   help="import a Python module (or file.py) that registers user effects; "
+                        "repeatable")
+    p.add_argument("--plots", metavar="DIR", help="write the report figures (PNG) to DIR")
+    p.add_argument("--json", action="store_true", help="print the result as JSON")
+    p.add_argument("--model-out", metavar="FILE",
+                   help="write the fitted model with its effects as a .model card")
+    p.add_argument("--name", default="VDIAG", help="model name of the card (default VDIAG)")
+    p.add_argument("--folds", type=int, default=5, help="cross-validation folds (default 5)")
+    p.add_argument("--max-effects", type=int, default=3, help="accept at most N effects")
+    p.add_argument("--ambient", type=float, metavar="KPA",
+                   help="barometric pressure for gauge data (with --gauge)")
+    p.add_argument("--gauge", action="store_true", help="pressures in the file are gauge")
+    p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+    p.set_defaults(func=run)
+
+
+def _load_plugin(spec):
+    import importlib
+    import importlib.util
+    from pathlib import Path
+
+    from ..errors import ParameterError
+
+    if spec.endswith(".py"):
+        path = Path(spec)
+        if not path.exists():
+            raise ParameterError(f"plugin file {spec} not found")
+        mod_spec = importlib.util.spec_from_file_location(path.stem, path)
+        module = importlib.util.module_from_spec(mod_spec)
+        mod_spec.loader.exec_module(module)
+        return module
+    return importlib.import_module(spec)
+
+
+def run(args) -> int:
+    from ..diagnose import diagnose
+
+    for spec in args.plugin:
+        _load_plugin(spec)
+    load = {}
+    if args.gauge:
+        load.update(gauge=True, ambient_kpa=args.ambient)
+    diag = diagnose(args.data, effects=args.effects, n_splits=args.folds,
+                    max_effects=args.max_effects, progress=not args.no_progress,
+                    load_options=load)
+    if args.plots:
+        diag.plots(args.plots)
+    if args.model_out:
+        with open(args.model_out, "w", encoding="utf-8") as fh:
+            fh.write(f"* fitted by pneunet diagnose from {args.data}\n")
+            fh.write(diag.model_card(args.name) + "\n")
+    if args.json:
+        json.dump(diag.to_json(), sys.stdout, indent=2)
+        sys.stdout.write("\n")
+    else:
+        print(diag.report())
+        if args.plots:
+            print(f"figures written to {args.plots}/")
+        if args.model_out:
+            print(f"model card written to {args.model_out}")
+    return 0
