@@ -60,8 +60,9 @@ def operating_point(circuit, *, t: float = 0.0) -> OperatingPoint:
         worst = dae.node_names[int(np.argmax(np.abs(res)))]
         raise SolverError(f"operating point not found (flow imbalance {result.residual:.3g} mg/s "
                           f"at node {worst})", time=t, where=f"node {worst}",
-                          hint="a closed volume has no steady state; check .ic values or "
-                               "run a transient instead")
+                          hint="the circuit may have no steady state it can settle in (an "
+                               "oscillator, or a closed volume): run a transient instead, or "
+                               "give .ic values close to the expected state")
     sol = _build_solution(dae, np.array([t]), result.y[None, :], {}, ())
     pressures = {k[2:]: float(v[0]) for k, v in sol.signals.items() if sol.units[k] == "kPa"
                  and k.startswith("p_")}
@@ -140,9 +141,6 @@ def transient(circuit, t_stop: float, *, t_step: float | None = None, t_start: f
             t, y = step.t, step.y
             times.append(t)
             states.append(y.copy())
-            if outputs is not None:
-                while out_i < len(outputs) - 1 and outputs[out_i] <= t + 1e-12:
-                    out_i += 1
             if step.status == EVENT:
                 t, y = folds.jump(t, y, step.yp, previous=(times[-2], states[-2]))
                 branch_jumps.append(t)
@@ -154,6 +152,9 @@ def transient(circuit, t_stop: float, *, t_step: float | None = None, t_start: f
                 times.append(t)
                 states.append(y.copy())
                 _restart(integrator, folds, dae, t, y)
+            if outputs is not None:  # after a jump t may have passed further outputs
+                while out_i < len(outputs) - 1 and outputs[out_i] <= t + 1e-12:
+                    out_i += 1
             if bar is not None:
                 bar.update(t - bar.n)
     finally:
@@ -181,6 +182,9 @@ def _progress(enabled, t0, t1):
 
 
 def _failure(dae, step, times, states, branch_jumps, integrator):
+    if not step.t >= times[-1]:  # some IDA failures report no time: use the last good one
+        step = StepResult(step.status, times[-1], states[-1],
+                          dae.derivative(times[-1], states[-1]), step.message)
     res = dae.evaluate(step.t, step.y, step.yp)[0]
     rate = np.abs(step.yp) / np.maximum(np.abs(step.y), 1.0)
     worst = dae.node_names[int(np.argmax(rate + np.abs(res)))] if dae.n else "?"

@@ -80,3 +80,11 @@ def test_flow_amplifier_reaches_supply_and_exhaust_each_half_cycle():
         assert end_of_half == pytest.approx(target, rel=0.02)
 
 
+
+
+def test_fixed_output_interval_across_branch_jumps():
+    """Output grid (t_step) and explicit jumps together: every half cycle is kept."""
+    sol = oscillator(R_vent=3.5).tran(30.0, t_step=0.01)
+    assert sol.t[-1] == pytest.approx(30.0)
+    assert len(sol.jumps) >= 8
+    assert np.all(np.diff(sol.t) >= 0)
