@@ -12,6 +12,49 @@ def _waveform_times(family, method, t_start, t_stop):
     return np.unique(np.concatenate(times)) if times else np.empty(0)
 
 
+class _WaveformBank:
+    """Values of many waveforms at one time: PULSE and constants vectorised.
+
+    Evaluated with the same floating-point operations as
+    :meth:`pneunet.waveforms.Pulse.value` (elementwise), so results are identical;
+    other waveforms are evaluated one by one.
+    """
+
+    def __init__(self, waveforms):
+        from ..waveforms import Constant, Pulse
+
+        self.n = len(waveforms)
+        kinds = np.array([0 if type(w) is Constant else 1 if type(w) is Pulse else 2
+                          for w in waveforms])
+        self._const = np.flatnonzero(kinds == 0)
+        self._level = np.array([float(waveforms[i].level) for i in self._const])
+        self._pulse = np.flatnonzero(kinds == 1)
+        cols = ("low", "high", "delay", "rise", "fall", "width", "period")
+        self._p = {k: np.array([getattr(waveforms[i], k) for i in self._pulse], dtype=float)
+                   for k in cols}
+        self._other = [(i, waveforms[i]) for i in np.flatnonzero(kinds == 2)]
+
+    def value(self, t):
+        out = np.empty(self.n)
+        out[self._const] = self._level
+        if self._pulse.size:
+            p = self._p
+            tau = t - p["delay"]
+            periodic = p["period"] > 0
+            wrap = periodic & (tau >= 0)
+            tau = np.where(wrap, np.mod(tau, np.where(periodic, p["period"], 1.0)), tau)
+            r, w, f = p["rise"], p["width"], p["fall"]
+            with np.errstate(divide="ignore", invalid="ignore"):
+                up = np.where(r > 0, tau / np.where(r > 0, r, 1.0), 1.0)
+                down = np.where(f > 0, 1.0 - (tau - r - w) / np.where(f > 0, f, 1.0), 0.0)
+            frac = np.select([tau < 0, tau < r, tau < r + w, tau < r + w + f],
+                             [0.0, up, 1.0, down], 0.0)
+            out[self._pulse] = p["low"] + (p["high"] - p["low"]) * frac
+        for i, wave in self._other:
+            out[i] = wave.value(t)
+        return out
+
+
 @register
 class PressureSource(ElementFamily):
     """Imposes an absolute pressure (kPa), constant or a waveform, at its node."""
@@ -24,8 +67,12 @@ class PressureSource(ElementFamily):
     params = {"value": Param("pressure", "absolute pressure or waveform, kPa", low=0.0,
                              low_inclusive=False, kind="waveform")}
 
+    def __init__(self, specs, context):
+        super().__init__(specs, context)
+        self._waveforms = _WaveformBank([s.params["value"] for s in specs])
+
     def pinned_pressure(self, t):
-        return np.array([[s.params["value"].value(t)] for s in self.specs], dtype=float)
+        return self._waveforms.value(t)[:, None]
 
     def jumps(self, t_start, t_stop):
         return _waveform_times(self, "jumps", t_start, t_stop)
