@@ -204,10 +204,11 @@ def _build_solution(dae, times, states, stats, branch_jumps) -> Solution:
         if not dae.circuit.is_reference(name):
             signals[f"p_{name}"] = full[:, dae.node_index(name)]
             units[f"p_{name}"] = "kPa"
-    for source, node in dae.pinned_sources().items():
-        idx = dae.node_index(node)
-        signals[f"mdot_{source}"] = np.array([dae.node_outflow(t, y)[idx]
-                                              for t, y in zip(times, states)])
+    pinned = dae.pinned_sources()
+    if pinned:  # one evaluation per time point for all sources (not one per source)
+        outflow = np.array([dae.node_outflow(t, y) for t, y in zip(times, states)])
+    for source, node in pinned.items():
+        signals[f"mdot_{source}"] = outflow[:, dae.node_index(node)]
         units[f"mdot_{source}"] = "mg/s"
     for key, (unit, values) in dae.element_signals(times, full).items():
         signals[key] = values
