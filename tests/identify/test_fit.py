@@ -11,30 +11,86 @@ from pneunet.identify.fit import NAMES, auto_mdot_min
 from pneunet.valve_params import PAPER_VALVES, ValveParams
 
 
-@pytest.mark.parametrize("name", ["axi", "mirror_forward", "mirror_backward"])
-def test_round_trip_paper_valves(fitted, name):
-    """Done-criterion 1: realistic bench data (4410 points) fitted back."""
+VALVES = ("axi", "mirror_forward", "mirror_backward")
+
+
+def _misses(fits, truth):
+    """Per parameter, the seeds whose 95 % interval misses the truth."""
+    return {k: [seed for seed, fit in fits.items()
+                if not fit.ci95[k][0] <= getattr(truth, k) <= fit.ci95[k][1]] for k in NAMES}
+
+
+@pytest.mark.parametrize("name", VALVES)
+def test_round_trip_accuracy_every_seed(round_trips, name):
+    """Done-criterion 1, accuracy: realistic bench data (4410 points), every seed."""
     truth = PAPER_VALVES[name]
-    fit = fitted(name, mdot_min="auto")
-    assert fit.metrics["n"] == 4410
-    for k in NAMES:
-        lo, hi = fit.ci95[k]
-        assert lo <= getattr(truth, k) <= hi, (k, getattr(fit.params, k), fit.ci95[k])
-        assert fit.stderr[k] > 0
-    assert fit.params.Rf == pytest.approx(truth.Rf, rel=0.03)
-    assert fit.params.ain + fit.params.aout == pytest.approx(truth.ain + truth.aout, rel=0.03)
-    assert abs(fit.params.pclose - truth.pclose) < 5.0
+    for seed, fit in round_trips(name, mdot_min="auto").items():
+        assert fit.metrics["n"] == 4410
+        assert all(fit.stderr[k] > 0 for k in NAMES), seed
+        assert fit.params.Rf == pytest.approx(truth.Rf, rel=0.03), seed
+        assert fit.params.ain + fit.params.aout == pytest.approx(truth.ain + truth.aout,
+                                                                 rel=0.03), seed
+        assert abs(fit.params.pclose - truth.pclose) < 5.0, seed
 
 
-def test_paper_threshold_fixed_at_one_mg_s(fitted):
+def test_round_trip_intervals_hold_the_truth(round_trips):
+    """Done-criterion 1, intervals: over the first seeds of all three valves.
+
+    A 95 % interval misses in 1 fit of 20, so no single seed can be required to
+    pass all six checks.  Counted over 3 valves × 6 seeds (18 fits per parameter),
+    each parameter's interval must hold the truth in at least 15: with independent
+    fits and honest intervals a 4th miss has probability ~1 % (~28 % at the old
+    ~85 % coverage).  The valves share the seeds' noise draws, which makes misses
+    cluster: in the 110-seed study (benchmarks/coverage_fit.py, docs/identify.md)
+    16 of the 18 blocks of 6 consecutive seeds pass; seeds 0-5 have 3 misses at most
+    and 13 of the 108 checks in all (the study's worst blocks have 16).
+    """
+    per_param = {k: [] for k in NAMES}
+    for name in VALVES:
+        for k, seeds in _misses(round_trips(name, mdot_min="auto"), PAPER_VALVES[name]).items():
+            per_param[k] += [(name, seed) for seed in seeds]
+    assert all(len(v) <= 3 for v in per_param.values()), per_param
+    assert sum(len(v) for v in per_param.values()) <= 16, per_param
+
+
+def test_paper_threshold_fixed_at_one_mg_s(round_trips):
     """With the paper's defaults (ṁ_min 1 mg/s, C 0.1) the same criteria hold for axi."""
     truth = PAPER_VALVES["axi"]
-    fit = fitted("axi")
-    assert fit.mdot_min == 1.0 and fit.C == 0.1
+    fits = round_trips("axi")
+    for fit in fits.values():
+        assert fit.mdot_min == 1.0 and fit.C == 0.1
+        assert abs(fit.params.pclose - truth.pclose) < 5.0
+        assert fit.params.Rf == pytest.approx(truth.Rf, rel=0.03)
+    misses = _misses(fits, truth)
+    assert all(len(v) <= 2 for v in misses.values()), misses  # 6 fits per parameter
+    assert sum(len(v) for v in misses.values()) <= 5, misses
+
+
+def test_sweep_groups_of_the_paper_protocol(bench):
+    from pneunet.identify.fit import sweep_groups
+
+    data = bench("axi")
+    groups = sweep_groups(data)
+    assert groups.max() + 1 == 210 and np.all(np.bincount(groups) == 21)
+    # without the sweep column: split at the highest p_ctrl of each run
+    assert np.array_equal(sweep_groups(data.drop(columns=["sweep"])), groups)
+    both = data.assign(group=data["p_in_cmd_kPa"])
+    assert sweep_groups(both).max() + 1 == 20
+
+
+def test_uncertainty_options(bench):
+    """Groups: sweeps by default, points on request; n_boot=0 keeps stage-2 errors."""
+    data = bench("axi")
+    sweeps = fit_valve(data, n_boot=30)
+    points = fit_valve(data, n_boot=30, groups=None)
+    assert sweeps.settings["n_groups"] == 210 and points.settings["n_groups"] == 4410
+    assert "block bootstrap over 210 sweeps" in sweeps.report()
     for k in NAMES:
-        lo, hi = fit.ci95[k]
-        assert lo <= getattr(truth, k) <= hi, k
-    assert abs(fit.params.pclose - truth.pclose) < 5.0
+        assert 0.3 < sweeps.stderr[k] / points.stderr[k] < 3.0, k
+    bare = fit_valve(data, n_boot=0)
+    assert bare.stderr["ain"] == 0 and bare.stderr["Rf"] > 0
+    with pytest.raises(DataError, match="no such column"):
+        fit_valve(data, n_boot=0, groups="nope")
 
 
 def test_threshold_correction_removes_the_paper_procedures_bias(fitted):
