@@ -84,7 +84,7 @@ def test_uncertainty_options(bench):
     sweeps = fit_valve(data, n_boot=30)
     points = fit_valve(data, n_boot=30, groups=None)
     assert sweeps.settings["n_groups"] == 210 and points.settings["n_groups"] == 4410
-    assert "block bootstrap over 210 sweeps" in sweeps.report()
+    assert "30 half-samples of 210 sweeps" in sweeps.report()
     for k in NAMES:
         assert 0.3 < sweeps.stderr[k] / points.stderr[k] < 3.0, k
     bare = fit_valve(data, n_boot=0)
