@@ -36,7 +36,7 @@ def register(subparsers) -> None:
     p.add_argument("--paper", action="store_true",
                    help="no threshold correction of stage 1 (the paper's exact procedure)")
     p.add_argument("--bootstrap", type=int, default=100, metavar="N",
-                   help="bootstrap replicates for the stage-1 uncertainties (default 100)")
+                   help="sweep-resampling replicates for the parameter uncertainties (default 100; 0: sandwich only)")
     p.add_argument("--name", default="VFIT", help="model name for the .model card")
     p.add_argument("--model-out", metavar="FILE", help="write the .model card to FILE")
     p.add_argument("--plots", metavar="DIR", help="write Figs. 6-8 as PNG into DIR")
