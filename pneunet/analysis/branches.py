@@ -144,7 +144,7 @@ def closure_pressure(spec: OscillatorSpec) -> float:
     return (v.ain * spec.pH - v.pclose) / (1.0 - v.aout)
 
 
-def stationary_branches(spec: OscillatorSpec | None = None, *, band: float = 0.0, ds: float = 2.0,
+def stationary_branches(spec: OscillatorSpec | None = None, *, band: float = 0.0, ds: float = 5.0,
                         max_steps: int = 5000, p_c_low: float | None = None, **kw) -> Branches:
     """Trace the stationary curve of eq. 28 by pseudo-arclength continuation.
 
@@ -262,11 +262,14 @@ def _equilibria(curve, spec, pts, attracting):
             w = h[i] / (h[i] - h[i + 1]) if h[i] != h[i + 1] else 0.0
             pc = pts[i, 0] + w * (pts[i + 1, 0] - pts[i, 0])
             m = pts[i, 1] + w * (pts[i + 1, 1] - pts[i, 1])
-            # d(ṁ − ṁ_vent)/dp_c along the branch
-            dpc = pts[i + 1, 0] - pts[i, 0]
-            slope = (h[i + 1] - h[i]) / dpc if dpc != 0 else np.inf
-            stable = bool(attracting[i] and attracting[i + 1] and slope < 0)
             pc, m = _refine_equilibrium(curve, spec, pc, m)
+            # at the equilibrium itself: attracting piece (F_ṁ > 0) and
+            # d(ṁ − ṁ_vent)/dp_c < 0 along the branch (dṁ/dp_c = −F_p/F_ṁ)
+            fp, fm = curve.grad(pc, m)
+            hv = 1e-6 * pc
+            dvent = (vent_flow(pc + hv, spec.pL, spec.Rvent)
+                     - vent_flow(pc - hv, spec.pL, spec.Rvent)) / (2 * hv)
+            stable = bool(fm > 0 and -fp / fm - dvent < 0)
             out.append(Equilibrium(float(pc), float(m), stable))
     return out
 
@@ -304,8 +307,7 @@ def spec_from_circuit(circuit, node: str | None = None) -> OscillatorSpec:
     pinned = {}
     for e in els.values():
         if e.kind == "pressure_source":
-            pinned[e.nodes[0]] = float(e.params["value"](0.0)) if callable(e.params["value"]) \
-                else float(e.params["value"].level)
+            pinned[e.nodes[0]] = float(e.params["value"].value(0.0))
     for ref in ("0", "gnd", "atm"):
         pinned.setdefault(ref, circuit.options.ambient)
     for v in els.values():
@@ -352,10 +354,7 @@ def plot_branches(branches: Branches, path=None, ax=None, trajectory=None, title
     ms = np.linspace(0, m_top, 200)
     P, Mg = np.meshgrid(pcs, ms)
     sign = np.sign(Mg - vent_flow(P, s.pL, s.Rvent))
-    from matplotlib.colors import ListedColormap
-
-    ax.contourf(P, Mg, sign, levels=[-2, 0, 2], cmap=ListedColormap(["#f4b6b6", "#b9e4b9"]),
-                alpha=0.8)
+    ax.contourf(P, Mg, sign, levels=[-2, 0, 2], colors=["#f4b6b6", "#b9e4b9"], alpha=0.8)
     ax.plot(pcs, vent_flow(pcs, s.pL, s.Rvent), color="0.4", lw=0.8, ls=":",
             label="vent flow (ṗ_c = 0)")
     pc, m, att = branches.p_c, branches.mdot, branches.attracting

@@ -150,7 +150,7 @@ def apply_overrides(circuit, point: dict):
     for key, value in point.items():
         if "." not in key:
             continue
-        name, param = key.split(".", 1)
+        name, param = key.rsplit(".", 1)  # element names of subcircuits contain dots
         if name not in circuit.elements:
             raise ParameterError(f"sweep parameter {key}: no element {name!r}",
                                  hint="elements: " + ", ".join(circuit.elements))
@@ -160,7 +160,7 @@ def apply_overrides(circuit, point: dict):
             spec.params["model"] = dataclasses.replace(model, **{param: float(value)})
         elif param in spec.params:
             old = spec.params[param]
-            if hasattr(old, "level"):  # a constant waveform
+            if hasattr(old, "level") or (param == "value" and spec.kind.endswith("source")):
                 from ..waveforms import as_waveform
 
                 spec.params[param] = as_waveform(float(value))

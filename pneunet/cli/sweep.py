@@ -1,0 +1,181 @@
+"""``pneunet sweep``: parameter sweeps of a netlist or a built-in circuit, in parallel."""
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser(
+        "sweep", help="sweep parameters (grid, Latin hypercube, Monte Carlo) in parallel",
+        description="Evaluate a circuit at many parameter points on a local process pool "
+                    "(all cores by default) or a dask cluster, write one table row per point, "
+                    "and with two swept parameters of an oscillator draw the regime map. "
+                    "Finished points are appended to a JSON-lines store: rerunning the same "
+                    "command computes only the missing points. "
+                    "Example: pneunet sweep --circuit oscillator --param Rout=lin:0.2:3:20 "
+                    "--param Rvent=lin:1:6:20 --out map.csv --plot map.png")
+    p.add_argument("netlist", nargs="?", metavar="FILE.pn",
+                   help="netlist; plain names override its .param values, ELEMENT.PARAM sets "
+                        "an element or valve-model parameter; without --param its .step "
+                        "points are used")
+    p.add_argument("--circuit", choices=["oscillator"], default=None,
+                   help="a built-in circuit instead of a netlist (the paper's oscillator; "
+                        "parameters pH pL Rout Rvent V n V_out R_tube)")
+    p.add_argument("--param", action="append", default=[], metavar="NAME=SPEC",
+                   help="swept axis: NAME=lin:START:STOP:N, NAME=log:START:STOP:N, "
+                        "NAME=list:a,b,c (repeat for a grid)")
+    p.add_argument("--tol", action="append", default=[], metavar="NAME=NOMINAL:PLUSMINUS",
+                   help="a tolerance for --lhs/--mc sampling, e.g. X1.pclose=96.42:5")
+    p.add_argument("--lhs", type=int, default=0, metavar="N",
+                   help="N Latin-hypercube points over the --tol ranges")
+    p.add_argument("--mc", type=int, default=0, metavar="N", help="N Monte Carlo points")
+    p.add_argument("--seed", type=int, default=0, help="random seed for --lhs/--mc")
+    p.add_argument("--analysis", choices=["regime", "oscillation", "meas"], default=None,
+                   help="regime: oscillation + stationary-branch prediction (default for "
+                        "oscillators); oscillation: period/duty/extremes; meas: the netlist's "
+                        ".meas results (default for netlists with .meas)")
+    p.add_argument("--node", default="tank", help="node analysed for oscillation (default tank)")
+    p.add_argument("--t-stop", type=float, default=None, metavar="S",
+                   help="fixed transient length; default: simulate until the cycle converges")
+    p.add_argument("--workers", type=int, default=None,
+                   help="local worker processes (default: all cores; 1 = no pool)")
+    p.add_argument("--dask", metavar="ADDRESS", default=None,
+                   help="run on a dask.distributed scheduler (ADDRESS, or 'local' for a "
+                        "LocalCluster on this machine)")
+    p.add_argument("--out", "-o", metavar="CSV", default="sweep.csv",
+                   help="table to write (default sweep.csv)")
+    p.add_argument("--store", metavar="JSONL", default=None,
+                   help="incremental results (default: <out>.jsonl); reruns resume from it")
+    p.add_argument("--fresh", action="store_true", help="ignore and replace an existing store")
+    p.add_argument("--retry-failed", action="store_true", help="recompute failed points")
+    p.add_argument("--plot", metavar="PNG", default=None,
+                   help="regime map (two axes) or measurement vs parameter (one axis)")
+    p.add_argument("--json", action="store_true", help="print a JSON summary with all rows")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=main)
+
+
+def main(args) -> int:
+    from ..errors import ParameterError
+    from ..analysis import sweep as S
+
+    if bool(args.netlist) == bool(args.circuit):
+        raise ParameterError("give a netlist file or --circuit oscillator (not both)")
+    axes = [S.parse_axis(a) for a in args.param]
+    dists = {}
+    for t in args.tol:
+        name, _, spec = t.partition("=")
+        try:
+            nominal, pm = (float(x) for x in spec.split(":"))
+        except ValueError:
+            raise ParameterError(f"bad tolerance {t!r}", hint="NAME=NOMINAL:PLUSMINUS") from None
+        dists[name] = S.tolerance(nominal, pm)
+    if args.netlist:
+        build = S.NetlistBuilder(args.netlist)
+        deck = build.deck()
+        has_meas = bool(deck.measures)
+    else:
+        from ..analysis.circuits import oscillator as build
+
+        has_meas = False
+    if args.lhs or args.mc:
+        if not dists:
+            raise ParameterError("--lhs/--mc need --tol ranges")
+        points = (S.latin_hypercube if args.lhs else S.monte_carlo)(dists, args.lhs or args.mc,
+                                                                    seed=args.seed)
+        if axes:
+            points = [dict(g, **p) for g in S.grid(*axes) for p in points]
+    elif axes:
+        points = S.grid(*axes)
+    elif args.netlist:
+        points = S.netlist_steps(args.netlist)
+        if points == [{}]:
+            raise ParameterError("nothing to sweep", hint="add --param or .step lines")
+    else:
+        raise ParameterError("nothing to sweep", hint="add --param NAME=lin:START:STOP:N")
+
+    kind = args.analysis or ("meas" if has_meas and not axes_are_oscillator(args) else "regime")
+    if kind == "meas":
+        if not args.netlist:
+            raise ParameterError("--analysis meas needs a netlist with .meas statements")
+        analysis = S.DeckMeasure(build)
+    elif kind == "regime":
+        from ..analysis.regime import RegimeMeasure
+
+        analysis = RegimeMeasure(node=args.node, t_stop=args.t_stop)
+    else:
+        analysis = S.OscillationMeasure(node=args.node, t_stop=args.t_stop)
+
+    out = Path(args.out)
+    store = Path(args.store) if args.store else out.with_suffix(out.suffix + ".jsonl")
+    if args.fresh and store.exists():
+        store.unlink()
+    executor, cluster = None, None
+    if args.dask:
+        from distributed import Client, LocalCluster
+
+        if args.dask == "local":
+            cluster = LocalCluster(n_workers=args.workers or 2, threads_per_worker=1,
+                                   dashboard_address=None)
+            executor = Client(cluster)
+        else:
+            executor = Client(args.dask)
+    progress = not (args.no_progress or args.json)
+    try:
+        result = S.run_sweep(build, points, analysis, executor=executor, workers=args.workers,
+                             store=store, progress=progress, retry_failed=args.retry_failed)
+    finally:
+        if executor is not None:
+            executor.close()
+        if cluster is not None:
+            cluster.close()
+    result.to_csv(out)
+    summary = {"points": len(points), "computed": result.computed, "reused": result.reused,
+               "failed": result.failed, "workers": result.workers,
+               "wall_time_s": round(result.wall_time_s, 3), "table": str(out), "store": str(store)}
+    table = result.table
+    if "regime_branches" in table.columns:
+        from ..analysis.regime import agreement
+
+        summary["agreement"] = agreement(table)
+    if args.plot:
+        summary["plot"] = str(_plot(table, axes, args.plot))
+    if args.json:
+        summary["rows"] = json.loads(table.to_json(orient="records"))
+        print(json.dumps(summary, indent=1))
+    else:
+        print(f"{summary['points']} points ({result.computed} computed, {result.reused} from "
+              f"{store}), {result.failed} failed, {result.workers} worker(s), "
+              f"{result.wall_time_s:.1f} s -> {out}")
+        if "agreement" in summary:
+            a = summary["agreement"]
+            print(f"regime: transient and stationary branches agree at {a['agree']} of "
+                  f"{a['compared']} points")
+        if args.plot:
+            print(f"plot -> {summary['plot']}")
+    return 1 if result.failed == len(points) else 0
+
+
+def axes_are_oscillator(args) -> bool:
+    return args.analysis in ("regime", "oscillation")
+
+
+def _plot(table, axes, path):
+    from ..analysis.regime import plot_regime_map
+    from ..plotting import pyplot, save
+
+    names = [a.name for a in axes]
+    if len(names) == 2 and "regime" in table.columns:
+        return plot_regime_map(table, names[0], names[1], path)
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(6, 4))
+    x = names[0] if names else table.columns[0]
+    numeric = [c for c in table.columns if c not in names and c not in ("elapsed_s", "cycles")
+               and table[c].dtype.kind == "f"][:4]
+    for c in numeric:
+        ax.plot(table[x], table[c], "o-", label=c)
+    ax.set_xlabel(x)
+    ax.legend(fontsize=8)
+    return save(fig, path)
