@@ -17,6 +17,8 @@ from .solution import OperatingPoint, Solution
 from .solvers.base import EVENT, FAILED, StepResult, available_backends
 from .solvers.newton import newton
 
+VACUUM_KPA = 0.1  # absolute pressure below which a circuit has left its physical range
+
 
 def _residual_jac(dae, t, ydot=None):
     zeros = np.zeros(dae.n) if ydot is None else ydot
@@ -120,6 +122,7 @@ def transient(circuit, t_stop: float, *, t_step: float | None = None, t_start: f
     bar = _progress(progress, t_start, t_stop)
     out_i = 0
     retried_at = None
+    tiny_steps = 0
     try:
         while t < t_stop:
             next_stop = stops[np.searchsorted(stops, t, side="right")]
@@ -138,6 +141,14 @@ def transient(circuit, t_stop: float, *, t_step: float | None = None, t_start: f
                                       dae.derivative(times[-1], states[-1]), step.message)
             if step.status == FAILED:
                 raise _failure(dae, step, times, states, branch_jumps, integrator)
+            tiny_steps = tiny_steps + 1 if step.t - t < 1e-7 * (t_stop - t_start) else 0
+            stalled = tiny_steps > 1000 or (dae.n and step.y.min() < VACUUM_KPA)
+            if stalled and step.status != FAILED:
+                why = (f"a pressure fell below {VACUUM_KPA} kPa abs (vacuum)"
+                       if dae.n and step.y.min() < VACUUM_KPA else
+                       f"the time step collapsed (1000 steps below {1e-7 * (t_stop - t_start):.1e} s)")
+                raise _failure(dae, StepResult(FAILED, step.t, step.y, step.yp, why),
+                               times, states, branch_jumps, integrator)
             t, y = step.t, step.y
             times.append(t)
             states.append(y.copy())
@@ -187,7 +198,8 @@ def _failure(dae, step, times, states, branch_jumps, integrator):
                           dae.derivative(times[-1], states[-1]), step.message)
     res = dae.evaluate(step.t, step.y, step.yp)[0]
     rate = np.abs(step.yp) / np.maximum(np.abs(step.y), 1.0)
-    worst = dae.node_names[int(np.argmax(rate + np.abs(res)))] if dae.n else "?"
+    worst = dae.node_names[int(np.argmax(rate + np.abs(res) + (step.y < VACUUM_KPA) * 1e300))] \
+        if dae.n else "?"
     partial = _build_solution(dae, np.array(times), np.array(states),
                               dict(integrator.counters(), failed=True), tuple(branch_jumps))
     return SolverError(

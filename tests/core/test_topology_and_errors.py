@@ -91,7 +91,7 @@ def test_solver_failure_reports_time_node_advice_and_keeps_partial_results():
         c.tran(1.0)
     e = err.value
     assert e.time == pytest.approx(0.119, abs=0.01)
-    assert "node tank" in str(e) and "try" in str(e)
+    assert "node tank" in str(e) and "vacuum" in str(e) and "try" in str(e)
     assert e.partial is not None and e.partial.t[-1] <= e.time + 1e-9
 
 
