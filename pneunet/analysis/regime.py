@@ -68,28 +68,36 @@ def plot_regime_map(table, x: str, y: str, path=None, title=None):
     from ..plotting import pyplot, save
 
     plt = pyplot()
+
     xs = np.sort(table[x].unique())
     ys = np.sort(table[y].unique())
     period = np.full((len(ys), len(xs)), np.nan)
-    osc = np.zeros_like(period)
+    state = np.full_like(period, np.nan)  # 1 oscillation, 0 equilibrium, nan failed/undetermined
     pred = np.zeros_like(period)
     for _, row in table.iterrows():
         i, j = np.searchsorted(ys, row[y]), np.searchsorted(xs, row[x])
         if row.get("regime") == "oscillation":
             period[i, j] = row["period_s"]
-            osc[i, j] = 1
+            state[i, j] = 1
+        elif row.get("regime") == "equilibrium":
+            state[i, j] = 0
         pred[i, j] = 1.0 if row.get("regime_branches") == "oscillation" else 0.0
     fig, ax = plt.subplots(figsize=(6.6, 4.8))
-    ax.pcolormesh(xs, ys, np.where(osc == 0, 0.0, np.nan), cmap="Greys", vmin=0, vmax=3,
-                  shading="nearest")
+    ax.pcolormesh(xs, ys, np.where(state == 0, 1.0, np.nan), cmap="Greys", vmin=0.0,
+                  vmax=4.0, shading="nearest")  # light grey: settles
     mesh = ax.pcolormesh(xs, ys, period, cmap="viridis", shading="nearest")
     fig.colorbar(mesh, ax=ax, label="period (s)")
     if 0 < pred.sum() < pred.size:
         ax.contour(xs, ys, pred, levels=[0.5], colors="crimson", linewidths=2)
-    bad = (osc != pred)
+    failed = np.isnan(state)
+    if failed.any():
+        yy, xx = np.nonzero(failed)
+        ax.plot(xs[xx], ys[yy], "o", color="k", ms=4, label="simulation failed / undetermined")
+    bad = ~failed & (state != pred)
     if bad.any():
         yy, xx = np.nonzero(bad)
-        ax.plot(xs[xx], ys[yy], "x", color="crimson", ms=6, label="classifications differ")
+        ax.plot(xs[xx], ys[yy], "x", color="crimson", ms=7, mew=2, label="classifications differ")
+    if failed.any() or bad.any():
         ax.legend(fontsize=8, loc="upper left")
     ax.set_xlabel(_label(x))
     ax.set_ylabel(_label(y))

@@ -1,7 +1,11 @@
 """SUNDIALS IDA through scikit-sundae — the only module that imports sksundae.
 
-Sparse systems use SuperLU_MT with the circuit's analytic CSC Jacobian (data in
-the pattern's order, filled in place); small systems use the dense solver.
+Linear algebra: small systems use IDA's dense solver with the analytic Jacobian.
+Large ones use GMRES preconditioned by an exact sparse LU factorisation of the
+analytic Jacobian (scipy's SuperLU, refactorised whenever IDA asks for a new
+Jacobian): GMRES then converges in one or two iterations.  This measured several
+times faster than scikit-sundae's SuperLU_MT direct solver, whose set-up costs
+~15 ms per factorisation even at a few hundred unknowns (benchmarks/README.md).
 """
 from __future__ import annotations
 
@@ -20,15 +24,16 @@ class SundaeIntegrator(Integrator):
         self.dae = dae
         self.n_res = 0
         self.n_jac = 0
-        self._last = None
-        dense = dae.n <= DENSE_LIMIT
+        self._lu = None
+        self.dense = dae.n <= DENSE_LIMIT
         options = dict(rtol=rtol, atol=atol, max_num_steps=100000, max_step=max_step,
                        constraints_idx=np.arange(dae.n), constraints_type=np.full(dae.n, 2),
                        algebraic_idx=dae.algebraic_idx if dae.algebraic_idx.size else None)
-        if dense:
+        if self.dense:
             options.update(linsolver="dense", jacfn=self._jac_dense)
         else:
-            options.update(linsolver="sparse", sparsity=dae.sparsity(), jacfn=self._jac_sparse)
+            options.update(linsolver="gmres", krylov_dim=10,
+                           precond=ida.IDAPrecond(self._lu_setup, self._lu_solve))
         if events is not None:
             def eventsfn(t, y, yp, out):
                 out[0] = events(t, y)
@@ -41,13 +46,18 @@ class SundaeIntegrator(Integrator):
         self.n_res += 1
         res[:] = self.dae.evaluate(t, y, yp)[0]
 
-    def _jac_sparse(self, t, y, yp, res, cj, jj):
-        self.n_jac += 1
-        jj[:] = self.dae.evaluate(t, y, yp, cj)[1]
-
     def _jac_dense(self, t, y, yp, res, cj, jj):
         self.n_jac += 1
         jj[:, :] = self.dae.csc(self.dae.evaluate(t, y, yp, cj)[1]).toarray()
+
+    def _lu_setup(self, t, y, yp, res, cj):
+        from scipy.sparse.linalg import splu
+
+        self.n_jac += 1
+        self._lu = splu(self.dae.csc(self.dae.evaluate(t, y, yp, cj)[1]))
+
+    def _lu_solve(self, t, y, yp, res, rvec, zvec, cj, delta):
+        zvec[:] = self._lu.solve(np.asarray(rvec))
 
     def init(self, t, y, yp):
         result = self._solver.init_step(t, y, yp)
@@ -64,4 +74,4 @@ class SundaeIntegrator(Integrator):
 
     def counters(self):
         return {"residual_calls": self.n_res, "jacobian_calls": self.n_jac,
-                "linear_solver": "dense" if self.dae.n <= DENSE_LIMIT else "sparse (SuperLU_MT)"}
+                "linear_solver": "dense" if self.dense else "GMRES + sparse LU preconditioner"}
