@@ -506,8 +506,8 @@ def synthetic_trace(build: Callable, params: dict, t_end: float, *, dt: float = 
 
     c = build(params)
     apply_overrides(c, params)
-    sol = c.tran(t_end)
     times = np.arange(0.0, t_end + 1e-9, dt)
+    sol = c.tran(float(times[-1]), t_step=dt)
     rng = np.random.default_rng(seed)
     data = {"time_s": times}
     for s in signals:
