@@ -19,13 +19,17 @@ CLIPPARD_LIKE = ValveParams(Rf=CLIPPARD_RESISTANCE, pclose=-160.0, ptrans=-150.0
 
 
 def oscillator(R_out: float | None = None, *, R_vent: float = 3.0, V: float = 200.0,
-               p_high: float = 496.0, p_low: float = 96.0, valve="axi", **options) -> Circuit:
+               p_high: float = 496.0, p_low: float = 96.0, valve="axi", n: float = 1.0,
+               V_out: float = 0.0, R_tube: float = 0.0, **options) -> Circuit:
     """Single-valve relaxation oscillator (Fig. 11A): supply → valve → R_out → tank.
 
-    The tank (volume ``V``) feeds the valve's control port and vents to ``p_low``
-    through ``R_vent``.  ``R_out`` defaults to 2·R_f (limit cycle); 0 ties the
-    valve output to the tank (stable equilibrium).  Nodes: supply, out, tank, low.
-    Options (``ambient`` defaults to ``p_low``) go to :class:`~pneunet.SimulationOptions`.
+    The tank (volume ``V``, polytropic exponent ``n``) feeds the valve's control
+    port and vents to ``p_low`` through ``R_vent``.  ``R_out`` defaults to 2·R_f
+    (limit cycle); 0 ties the valve output to the tank (stable equilibrium).
+    Circuit-level effects: ``V_out`` tubing dead volume at the valve output (mL),
+    ``R_tube`` a tube between the sensed node ``tank`` and the volume.
+    Nodes: supply, out, tank, low.  Options (``ambient`` defaults to ``p_low``)
+    go to :class:`~pneunet.SimulationOptions`.
     """
     params = PAPER_VALVES[valve] if isinstance(valve, str) else valve
     R_out = 2 * params.Rf if R_out is None else R_out
@@ -36,9 +40,15 @@ def oscillator(R_out: float | None = None, *, R_vent: float = 3.0, V: float = 20
     if R_out > 0:
         c.valve("X1", "supply", "out", "tank", model=params)
         c.resistor("Rout", "out", "tank", R=R_out)
+        if V_out > 0:
+            c.volume("Vout", "out", V=V_out, p0=p_low)
     else:
         c.valve("X1", "supply", "tank", "tank", model=params)
-    c.volume("V1", "tank", V=V, p0=p_low)
+    volume_node = "tank"
+    if R_tube > 0:
+        volume_node = "tank_volume"
+        c.resistor("Rtube", "tank", volume_node, R=R_tube)
+    c.volume("V1", volume_node, V=V, n=n, p0=p_low)
     c.resistor("Rvent", "tank", "low", R=R_vent)
     return c
 

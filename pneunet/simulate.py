@@ -129,14 +129,19 @@ def transient(circuit, t_stop: float, *, t_step: float | None = None, t_start: f
             target = min(outputs[out_i], next_stop) if outputs is not None else next_stop
             step = integrator.step(target, next_stop, onestep=outputs is None)
             if step.status == FAILED and folds is not None and len(times) > 1:
+                past_fold = False
                 if retried_at != times[-1]:
                     # a large step ran past a fold: restart with small steps so that
                     # the fold indicator can stop the integration in time
                     retried_at = times[-1]
-                    states[-1], _ = consistent_state(dae, times[-1], states[-1])
-                    _restart(integrator, None, dae, times[-1], states[-1])
-                    continue
-                if folds.near_fold(times[-1], states[-1]):
+                    try:
+                        states[-1], _ = consistent_state(dae, times[-1], states[-1])
+                    except SolverError:
+                        past_fold = True  # the branch has already ended here: jump
+                    else:
+                        _restart(integrator, None, dae, times[-1], states[-1])
+                        continue
+                if past_fold or folds.near_fold(times[-1], states[-1]):
                     step = StepResult(EVENT, times.pop(), states.pop(),
                                       dae.derivative(times[-1], states[-1]), step.message)
             if step.status == FAILED:

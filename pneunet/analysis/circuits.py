@@ -16,34 +16,19 @@ OSCILLATOR_DEFAULTS = {"pH": 496.0, "pL": 96.0, "Rout": 1.132, "Rvent": 3.0, "V"
 def oscillator(params: dict | None = None, **options) -> Circuit:
     """The oscillator of Fig. 11A with parameters overriding :data:`OSCILLATOR_DEFAULTS`.
 
-    Nodes: ``supply`` (p_H), ``out`` (valve output), ``tank`` (p_c), ``low`` (p_L).
-    R_out = 0 ties the valve output to the tank.  Optional circuit-level effects:
-    ``n`` polytropic exponent of the tank, ``V_out`` tubing dead volume at the valve
-    output (mL), ``R_tube`` a tube between the tank volume and the sensed node ``tank``.
+    A dict-driven front end of :func:`pneunet.paper_circuits.oscillator` (module-level
+    and picklable, for sweeps).  Nodes: ``supply``, ``out``, ``tank``, ``low``.
     """
+    from ..paper_circuits import oscillator as build
+
     p = dict(OSCILLATOR_DEFAULTS)
     p.update(params or {})
     opts = {"ambient": p["ambient"]}
     if p["dead_volume"]:
         opts["dead_volume"] = p["dead_volume"]
     opts.update(options)
-    c = Circuit("oscillator", **opts)
-    c.pressure_source("PH", "supply", p["pH"])
-    if p["Rout"] > 0:
-        c.valve("X1", "supply", "out", "tank", model=p["valve"])
-        c.resistor("Rout", "out", "tank", R=p["Rout"])
-        if p["V_out"] > 0:
-            c.volume("Vout", "out", V=p["V_out"])
-    else:
-        c.valve("X1", "supply", "tank", "tank", model=p["valve"])
-    vol_node = "tank"
-    if p["R_tube"] > 0:
-        vol_node = "tank_volume"
-        c.resistor("Rtube", "tank", vol_node, R=p["R_tube"])
-    c.volume("V1", vol_node, V=p["V"], n=p["n"])
-    c.pressure_source("PL", "low", p["pL"])
-    c.resistor("Rvent", "tank", "low", R=p["Rvent"])
-    return c
+    return build(p["Rout"], R_vent=p["Rvent"], V=p["V"], p_high=p["pH"], p_low=p["pL"],
+                 valve=p["valve"], n=p["n"], V_out=p["V_out"], R_tube=p["R_tube"], **opts)
 
 
 def inverter(params: dict | None = None) -> Circuit:
