@@ -237,18 +237,11 @@ def oscillator_process_time(reltol):
     t_sp = None
     exe = shutil.which("ngspice")
     if exe:
-        from pneunet import Circuit
+        from pneunet.paper_circuits import oscillator
 
         # as netlists/oscillator.pn (30 s, ambient 96); ngspice gets a 0.05 mL dead volume
         # at 'out' (it aborts at the first time point with 'out' algebraic)
-        c = Circuit("osc", ambient=96)
-        c.volume("Vdead", "out", V="0.05mL", p0=96)
-        c.pressure_source("PH", "supply", 496)
-        c.valve("X1", "supply", "out", "tank", model="axi")
-        c.resistor("Rout", "out", "tank", R=1.132)
-        c.volume("V1", "tank", V="200mL")
-        c.pressure_source("PL", "low", 96)
-        c.resistor("Rvent", "tank", "low", R=3)
+        c = oscillator(V_out=0.05)
         text = spice_netlist(c, min(reltol, 1e-5), 0.01, t_stop=30.0)
         with tempfile.TemporaryDirectory() as tmp:
             path = os.path.join(tmp, "osc.cir")

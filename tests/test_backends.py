@@ -7,23 +7,12 @@ import numpy as np
 import pytest
 
 from pneunet import Circuit
+from pneunet.paper_circuits import oscillator
 from pneunet.simulate import transient
 from pneunet.solvers.base import available_backends
 
 needs_odes = pytest.mark.skipif("odes" not in available_backends(),
                                 reason="scikits.odes not installed (.ci/install-odes.sh)")
-
-
-def oscillator(**options):
-    """The R_out = 2R_f relaxation oscillator (MODEL.md values, ambient 96 kPa)."""
-    c = Circuit("oscillator", ambient=96, **options)
-    c.pressure_source("PH", "supply", 496)
-    c.valve("X1", "supply", "out", "tank", model="axi")
-    c.resistor("Rout", "out", "tank", R=1.132)
-    c.volume("V1", "tank", V="200mL")
-    c.pressure_source("PL", "low", 96)
-    c.resistor("Rvent", "tank", "low", R=3)
-    return c
 
 
 def period(t, p, t_from=3.0):
