@@ -274,7 +274,7 @@ def main(argv=None):
     have_spice = shutil.which("ngspice") is not None and not args.no_ngspice
     if not have_spice and not args.no_ngspice:
         print("note: ngspice not found (apt-get install -y ngspice): ngspice columns skipped")
-    print(f"{T_STOP:g} s of N valve cells; pneunet (sksundae, sparse) and scipy BDF at rtol "
+    print(f"{T_STOP:g} s of N valve cells; pneunet (sksundae) and scipy BDF at rtol "
           f"{args.rtol:g}; ngspice reltol {args.spice_reltol:g}, abstol 1e-6; "
           f"{os.cpu_count()} cores (shared)")
     rows = []
