@@ -662,6 +662,12 @@ def _period_error(times, ref, sol, node, mask):
         s = analyze_oscillation(sim_t[inside], sol.pressure(node)[inside]) if node else m
         if m.oscillating and s.oscillating:
             return m.period_s, s.period_s, s.period_s - m.period_s
+        # short windows (one or two cycles): median period between rising crossings
+        fm = cycle_features(times[w], ref[w])
+        fs = cycle_features(sim_t[inside], sol.pressure(node)[inside],
+                            fm["levels"] if fm else None) if node else None
+        if fm and fs:
+            return fm["period"], fs["period"], fs["period"] - fm["period"]
         return m.period_s, s.period_s, float("nan")
     except PneunetError:
         return float("nan"), float("nan"), float("nan")
