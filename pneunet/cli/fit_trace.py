@@ -30,7 +30,9 @@ def register(subparsers) -> None:
                    help="rank circuit-level effects by held-out error (slower: one fit each)")
     p.add_argument("--train-fraction", type=float, default=0.5,
                    help="fraction of the cycles used for fitting with --candidates (0.5)")
-    p.add_argument("--max-nfev", type=int, default=60, help="evaluation budget per fit (60)")
+    p.add_argument("--max-nfev", type=int, default=40,
+                   help="simulation budget of each fit's least-squares stage, Jacobian "
+                        "included (40)")
     p.add_argument("--plot", metavar="PNG", default=None, help="fit and residual plot")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
     p.add_argument("--no-progress", action="store_true", help="(fits print no progress bar)")
