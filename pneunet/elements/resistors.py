@@ -21,10 +21,9 @@ def pipe_resistance(length_mm, diameter_mm, friction, temperature_k, molar_mass_
 
 
 class _QuadratureFamily(ElementFamily):
-    ports = ("a", "b")
+    """Shared flow law of resistors; subclasses set ``self._r`` (kPa·s/mg) per instance."""
 
-    def resistance(self) -> np.ndarray:
-        raise NotImplementedError
+    ports = ("a", "b")
 
     def outflows(self, t, p, pdot):
         mdot, d_a, d_b = quadrature_flow(p[:, 0], p[:, 1], self._r,
