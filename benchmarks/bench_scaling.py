@@ -160,7 +160,8 @@ def spice_netlist(circuit, reltol, t_step, t_stop=T_STOP):
             lines.append(f"B{e.name} {i} {o} I={ue}/({v.Rf:.10g}*sqrt(1+{ue}*{ue}))"
                          f"*{_sr(i, o, band)}")
         else:
-            raise NotImplementedError(e.kind)
+            raise ValueError(f"element {e.name}: kind {e.kind!r} has no ngspice translation "
+                             "in this benchmark")
     lines += [".ic " + " ".join(ics[i:i + 50]) for i in range(0, len(ics), 50)]
     lines += [f".options reltol={reltol:g} abstol=1e-6 vntol=1e-6 chgtol=1e-12 itl4=50",
               f".tran {t_step:g} {t_stop:g} uic", ".end"]

@@ -9,18 +9,21 @@ SIN(VO VA FREQ TD THETA PHASE).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from abc import ABC, abstractmethod
+from dataclasses import dataclass
 
 import numpy as np
 
 from .errors import ParameterError
 
 
-class Waveform:
-    """Base class: subclasses implement ``value``, ``breakpoints``, ``netlist``."""
+class Waveform(ABC):
+    """Base class: subclasses implement ``value`` and ``netlist`` (and, where the
+    waveform has corners, ``breakpoints`` and ``jumps``)."""
 
+    @abstractmethod
     def value(self, t):
-        raise NotImplementedError
+        """Value at time(s) ``t`` (s), in the unit of the driven source."""
 
     def breakpoints(self, t_start: float, t_stop: float) -> np.ndarray:
         """Times in (t_start, t_stop) where the waveform or its slope jumps."""
@@ -30,8 +33,9 @@ class Waveform:
         """The subset of breakpoints where the value itself is discontinuous."""
         return np.empty(0)
 
+    @abstractmethod
     def netlist(self) -> str:
-        raise NotImplementedError
+        """The netlist text that writes this waveform back."""
 
 
 def _fmt(x: float) -> str:

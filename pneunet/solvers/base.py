@@ -1,6 +1,7 @@
 """What a transient backend provides: an integrator of F(t, y, ẏ) = 0 with events."""
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from dataclasses import dataclass
 
 import numpy as np
@@ -18,7 +19,7 @@ class StepResult:
     message: str = ""
 
 
-class Integrator:
+class Integrator(ABC):
     """Interface of a DAE integrator (see :mod:`pneunet.solvers.sundae`).
 
     ``init(t, y, yp)`` (re)starts from a consistent state; ``step(target, tstop,
@@ -28,11 +29,13 @@ class Integrator:
 
     name = "abstract"
 
+    @abstractmethod
     def init(self, t: float, y: np.ndarray, yp: np.ndarray) -> None:
-        raise NotImplementedError
+        """(Re)start the integration from a consistent state at time t."""
 
+    @abstractmethod
     def step(self, target: float, tstop: float, onestep: bool) -> StepResult:
-        raise NotImplementedError
+        """Advance towards ``target`` without passing ``tstop``."""
 
     def counters(self) -> dict:
         return {}
