@@ -25,9 +25,10 @@ from .elements.base import ElementSpec, FamilyContext
 class _FamilyBlock:
     family: elements.ElementFamily
     port_node: np.ndarray      # (n, P) global node index of each port
-    free_port: np.ndarray      # (n, P) True where the port's node is an unknown
     jac_pos: np.ndarray        # CSC data position of each free (i, j) port pair, flattened
-    jac_mask: np.ndarray       # (n, P, P) True for port pairs that are both free
+    jac_flat: np.ndarray       # flat (n·P·P) index of each port pair that is both free
+    free_flat: np.ndarray      # flat (n·P) index of each port at an unknown node
+    free_nodes: np.ndarray     # the unknown's index at each of those ports
 
 
 class CircuitDAE:
@@ -80,7 +81,10 @@ class CircuitDAE:
             rows.append(r)
             cols.append(c)
             owners.append(len(r))
-            blocks.append(_FamilyBlock(fam, port_node, free, np.empty(0, int), mask))
+            free_flat = np.flatnonzero(free.ravel())
+            blocks.append(_FamilyBlock(fam, port_node, np.empty(0, int),
+                                       np.flatnonzero(mask.ravel()), free_flat,
+                                       port_node.ravel()[free_flat]))
         rows = np.concatenate(rows) if rows else np.empty(0, int)
         cols = np.concatenate(cols) if cols else np.empty(0, int)
         # every unknown gets a diagonal entry, so the pattern is structurally regular
@@ -115,16 +119,20 @@ class CircuitDAE:
         return csc_matrix((data, self._csc_indices, self._csc_indptr), shape=(self.n, self.n))
 
     # -- evaluation -----------------------------------------------------------------
-    def full_pressures(self, t: float, y: np.ndarray) -> np.ndarray:
-        """Pressures of all nodes (unknowns first, then fixed ones), kPa."""
-        full = np.empty(self.n + len(self.fixed_names))
-        full[:self.n] = y
-        full[self._reference_idx] = self.options.ambient
+    def full_pressures(self, t, y: np.ndarray) -> np.ndarray:
+        """Pressures of all nodes (unknowns first, then fixed ones), kPa.
+
+        ``t`` a float and ``y`` (n,), or ``t`` (n_t,) and ``y`` (n_t, n) for a
+        whole history at once.
+        """
+        full = np.empty(np.shape(y)[:-1] + (self.n + len(self.fixed_names),))
+        full[..., :self.n] = y
+        full[..., self._reference_idx] = self.options.ambient
         for block in self._blocks:
             fam = block.family
             if fam.pinned_ports:
                 nodes = block.port_node[:, list(fam.pinned_ports)]
-                full[nodes] = fam.pinned_pressure(t)
+                full[..., nodes] = fam.pinned_pressure(t)
         return full
 
     def evaluate(self, t, y, ydot, cj=None, absolute=False):
@@ -133,24 +141,51 @@ class CircuitDAE:
         With ``absolute`` a third array holds Σ|contribution| per entry (the scale
         of each entry before cancellation, used by the fold indicator).
         """
-        p = self.full_pressures(t, y)
-        pdot = np.zeros_like(p)
-        pdot[:self.n] = ydot
+        p, pdot = self._port_state(t, y, ydot)
         res = np.zeros(self.n)
-        data = np.zeros(self.nnz) if cj is not None else None
+        if cj is None:
+            for block in self._blocks:
+                q = block.family.flows(t, p[block.port_node], pdot[block.port_node])
+                res += self._scatter_residual(block, q)
+            return (res, None, None) if absolute else (res, None)
+        data = np.zeros(self.nnz)
         scale = np.zeros(self.nnz) if absolute else None
         for block in self._blocks:
             q, dq_dp, dq_dpdot = block.family.outflows(t, p[block.port_node], pdot[block.port_node])
-            free = block.free_port
-            res += np.bincount(block.port_node[free], weights=q[free], minlength=self.n)[:self.n]
-            if cj is None:
-                continue
+            res += self._scatter_residual(block, q)
             values = dq_dp if dq_dpdot is None else dq_dp + cj * dq_dpdot
-            values = values[block.jac_mask]
+            values = values.ravel()[block.jac_flat]
             data += np.bincount(block.jac_pos, weights=values, minlength=self.nnz)
             if absolute:
                 scale += np.bincount(block.jac_pos, weights=np.abs(values), minlength=self.nnz)
         return (res, data, scale) if absolute else (res, data)
+
+    def jacobian_parts(self, t, y, ydot):
+        """Residual and the CSC data of ∂F/∂y and of ∂F/∂ẏ, kept apart so that
+        J·v = (∂F/∂y + cj·∂F/∂ẏ)·v can be formed later for any cj."""
+        p, pdot = self._port_state(t, y, ydot)
+        res, data_y, data_ydot = np.zeros(self.n), np.zeros(self.nnz), np.zeros(self.nnz)
+        for block in self._blocks:
+            q, dq_dp, dq_dpdot = block.family.outflows(t, p[block.port_node], pdot[block.port_node])
+            res += self._scatter_residual(block, q)
+            data_y += np.bincount(block.jac_pos, weights=dq_dp.ravel()[block.jac_flat],
+                                  minlength=self.nnz)
+            if dq_dpdot is not None:
+                data_ydot += np.bincount(block.jac_pos, weights=dq_dpdot.ravel()[block.jac_flat],
+                                         minlength=self.nnz)
+        return res, data_y, data_ydot
+
+    def _port_state(self, t, y, ydot):
+        """Pressures and their rates at all nodes (unknowns first, then fixed)."""
+        p = self.full_pressures(t, y)
+        pdot = np.zeros_like(p)
+        pdot[:self.n] = ydot
+        return p, pdot
+
+    def _scatter_residual(self, block, q):
+        """Sum a family's port flows (n, n_ports) into the unknowns' residuals."""
+        return np.bincount(block.free_nodes, weights=q.ravel()[block.free_flat],
+                           minlength=self.n)
 
     def jacobian(self, t, y, ydot, cj=0.0):
         """∂F/∂y + cj·∂F/∂ẏ as a scipy CSC matrix."""
@@ -194,18 +229,28 @@ class CircuitDAE:
                 y[self._index[name]] = value
         return y
 
-    def node_outflow(self, t, y) -> np.ndarray:
-        """Net mass flow leaving every node (unknown and fixed) into elements, mg/s.
+    def source_flows(self, times: np.ndarray, full_p: np.ndarray) -> dict[str, np.ndarray]:
+        """Mass flow each pressure source delivers over time, {name: (n_t,)}, mg/s.
 
-        At a source's node this is the flow the source delivers.
+        It is the net flow from the source's node into all other elements, from
+        the pressures alone (rates of change taken as zero).
         """
-        p = self.full_pressures(t, y)
-        out = np.zeros(len(p))
-        pdot = np.zeros_like(p)
+        sources = self.pinned_sources()
+        columns = {node: k for k, node in enumerate(dict.fromkeys(sources.values()))}
+        node_cols = np.full(len(self._index), -1)
+        for node, k in columns.items():
+            node_cols[self._index[node]] = k
+        total = np.zeros((len(times), len(columns)))
         for block in self._blocks:
-            q, _, _ = block.family.outflows(t, p[block.port_node], pdot[block.port_node])
-            out += np.bincount(block.port_node.ravel(), weights=q.ravel(), minlength=len(p))
-        return out
+            col = node_cols[block.port_node].ravel()
+            hit = np.flatnonzero(col >= 0)
+            if not hit.size:
+                continue
+            p = full_p[:, block.port_node]
+            q = block.family.flows(times, p, np.zeros_like(p)).reshape(len(times), -1)
+            for k in np.unique(col[hit]):
+                total[:, k] += q[:, hit[col[hit] == k]].sum(axis=1)
+        return {name: total[:, columns[node]] for name, node in sources.items()}
 
     def element_signals(self, t: np.ndarray, full_p: np.ndarray) -> dict[str, tuple[str, np.ndarray]]:
         """Per-element signals over time: {'mdot_Rout': ('mg/s', array)}."""

@@ -24,29 +24,41 @@ import numpy as np
 DEFAULT_FLOW_BAND_KPA2 = 10.0
 
 
-def signed_root(d, band=0.0):
-    """sr(d) = d/(d²+ε²)^¼ and its derivative d sr/dd (exact √ when band == 0)."""
+def signed_root(d, band=0.0, derivative=True):
+    """sr(d) = d/(d²+ε²)^¼ and its derivative d sr/dd (exact √ when band == 0).
+
+    The derivative is None when not asked for (the residual's fast path).
+    """
     d = np.asarray(d, dtype=float)
     if band == 0.0:
         root = np.sqrt(np.abs(d))
         value = np.sign(d) * root
+        if not derivative:
+            return value, None
         with np.errstate(divide="ignore"):
             slope = np.where(root > 0, 0.5 / np.where(root > 0, root, 1.0), np.inf)
         return value, slope
     s = d * d + band * band
-    value = d / s ** 0.25
-    slope = (0.5 * d * d + band * band) / s ** 1.25
+    fourth_root = np.sqrt(np.sqrt(s))  # much faster than s ** 0.25
+    value = d / fourth_root
+    if not derivative:
+        return value, None
+    slope = (0.5 * d * d + band * band) / (s * fourth_root)
     return value, slope
 
 
-def quadrature_flow(p_a, p_b, resistance, band=DEFAULT_FLOW_BAND_KPA2):
+def quadrature_flow(p_a, p_b, resistance, band=DEFAULT_FLOW_BAND_KPA2, partials=True):
     """Mass flow a→b through a quadrature resistor and its partials.
 
-    Returns ``(mdot, dmdot_dpa, dmdot_dpb)`` in mg/s and mg/(s·kPa).
+    Returns ``(mdot, dmdot_dpa, dmdot_dpb)`` in mg/s and mg/(s·kPa); the
+    partials are None when ``partials`` is False.
     """
-    root, slope = signed_root(p_a * p_a - p_b * p_b, band)
+    root, slope = signed_root(p_a * p_a - p_b * p_b, band, derivative=partials)
     mdot = root / resistance
-    return mdot, 2.0 * p_a * slope / resistance, -2.0 * p_b * slope / resistance
+    if not partials:
+        return mdot, None, None
+    slope = slope * (2.0 / resistance)
+    return mdot, p_a * slope, -p_b * slope
 
 
 def series_resistance(*resistances):
@@ -59,16 +71,19 @@ def valve_opening(delta_p, p_close, p_trans):
     return np.maximum(delta_p - p_close, 0.0) / (p_trans - p_close)
 
 
-def valve_conductance(delta_p, r_f, p_close, p_trans, e):
+def valve_conductance(delta_p, r_f, p_close, p_trans, e, derivative=True):
     """Valve conductance 1/R = u^e / (R_f·√(1+u^(2e))) (eq. 19) and d(1/R)/dΔp.
 
     Written with u^e in the numerator so that it is exact and smooth as the valve
-    closes (u → 0).  Returns ``(G, dG_ddp)`` in mg/(s·kPa) and mg/(s·kPa²).
+    closes (u → 0).  Returns ``(G, dG_ddp)`` in mg/(s·kPa) and mg/(s·kPa²);
+    dG_ddp is None when ``derivative`` is False.
     """
     u = valve_opening(delta_p, p_close, p_trans)
     ue = u ** e
     q = 1.0 + ue * ue
     g = ue / (r_f * np.sqrt(q))
+    if not derivative:
+        return g, None
     open_ = u > 0
     u_safe = np.where(open_, u, 1.0)
     dg_du = np.where(open_, e * u_safe ** (e - 1.0), 0.0) / (r_f * q ** 1.5)
@@ -80,10 +95,7 @@ def valve_delta_p(p_in, p_out, p_ctrl, a_in, a_out):
 
     a_in belongs to whichever of the two flow ports has the higher pressure.
     """
-    forward = p_in >= p_out
-    hi = np.where(forward, p_in, p_out)
-    lo = np.where(forward, p_out, p_in)
-    return a_in * hi + a_out * lo - p_ctrl
+    return a_in * np.maximum(p_in, p_out) + a_out * np.minimum(p_in, p_out) - p_ctrl
 
 
 def valve_flow(p_in, p_out, p_ctrl, Rf, pclose, ptrans, e, ain, aout, band=0.0):
@@ -109,8 +121,8 @@ def valve_flow_and_partials(p_in, p_out, p_ctrl, Rf, pclose, ptrans, e, ain, aou
     p_in, p_out, p_ctrl = (np.asarray(x, dtype=float) for x in (p_in, p_out, p_ctrl))
     forward = p_in >= p_out
     dp = valve_delta_p(p_in, p_out, p_ctrl, ain, aout)
-    g, dg = valve_conductance(dp, Rf, pclose, ptrans, e)
-    root, slope = signed_root(p_in * p_in - p_out * p_out, band)
+    g, dg = valve_conductance(dp, Rf, pclose, ptrans, e, derivative=partials)
+    root, slope = signed_root(p_in * p_in - p_out * p_out, band, derivative=partials)
     mdot = g * root
     if not partials:
         return mdot, None

@@ -215,19 +215,18 @@ def _failure(dae, step, times, states, branch_jumps, integrator):
 
 
 def _build_solution(dae, times, states, stats, branch_jumps) -> Solution:
-    full = np.array([dae.full_pressures(t, y) for t, y in zip(times, states)])
+    full = dae.full_pressures(times, states.reshape(len(times), dae.n))
     signals, units = {}, {}
     for name in dae.node_names + dae.fixed_names:
         if not dae.circuit.is_reference(name):
             signals[f"p_{name}"] = full[:, dae.node_index(name)]
             units[f"p_{name}"] = "kPa"
-    pinned = dae.pinned_sources()
-    if pinned:  # one evaluation per time point for all sources (not one per source)
-        outflow = np.array([dae.node_outflow(t, y) for t, y in zip(times, states)])
-    for source, node in pinned.items():
-        signals[f"mdot_{source}"] = outflow[:, dae.node_index(node)]
+    for source, flow in dae.source_flows(times, full).items():
+        signals[f"mdot_{source}"] = flow
         units[f"mdot_{source}"] = "mg/s"
     for key, (unit, values) in dae.element_signals(times, full).items():
         signals[key] = values
         units[key] = unit
+    for values in signals.values():  # views of arrays made here: hand them over uncopied
+        values.setflags(write=False)
     return Solution(times, signals, units, stats, dae.circuit.title, branch_jumps)

@@ -24,8 +24,13 @@ def column_name(signal: str, unit: str) -> str:
 
 
 def _freeze(mapping):
+    """Read-only float copies of the signals; arrays already read-only are kept as they are
+    (the analyses hand over read-only views of arrays nothing else holds)."""
     frozen = {}
     for k, v in mapping.items():
+        if isinstance(v, np.ndarray) and v.dtype == float and not v.flags.writeable:
+            frozen[k] = v
+            continue
         arr = np.array(v, dtype=float)
         arr.setflags(write=False)
         frozen[k] = arr

@@ -86,6 +86,32 @@ class Step(Waveform):
         return f"STEP({_fmt(self.initial)} {_fmt(self.final)} {_fmt(self.at)} {_fmt(self.rise)})"
 
 
+_TINY_S = 1e-300  # turns ramps of zero length into steps without dividing by zero
+
+
+def pulse_phase(t, delay, period):
+    """Time since the start of the current PULSE cycle (s); negative before ``delay``.
+
+    Elementwise: every argument may be an array (sources evaluated together).
+    """
+    tau = t - delay
+    periodic = period > 0
+    return np.where(periodic & (tau >= 0), np.mod(tau, np.where(periodic, period, 1.0)), tau)
+
+
+def pulse_fraction(tau, rise, width, fall):
+    """Fraction 0…1 of a PULSE's swing at phase ``tau`` (s), elementwise.
+
+    Rising for ``rise``, high for ``width``, falling for ``fall``; a ramp of zero
+    length is a step: high from tau = 0 on, low again from tau = rise + width on.
+    """
+    step_up = np.where(rise > 0, 0.0, _TINY_S)
+    with np.errstate(over="ignore"):
+        up = (tau + step_up) / (rise + step_up)
+        down = (rise + width + fall - tau) / np.where(fall > 0, fall, _TINY_S)
+    return np.clip(np.minimum(up, down), 0.0, 1.0)
+
+
 @dataclass(frozen=True)
 class Pulse(Waveform):
     """SPICE PULSE: ``low`` → ``high`` after ``delay``, ramps ``rise``/``fall``,
@@ -108,20 +134,9 @@ class Pulse(Waveform):
                 f"PULSE period {self.period} s is shorter than rise + width + fall "
                 f"({self.rise + self.width + self.fall} s)")
 
-    def _phase(self, t):
-        tau = np.asarray(t, dtype=float) - self.delay
-        if self.period > 0:
-            tau = np.where(tau >= 0, np.mod(tau, self.period), tau)
-        return tau
-
     def value(self, t):
-        tau = self._phase(t)
-        r, w, f = self.rise, self.width, self.fall
-        with np.errstate(divide="ignore", invalid="ignore"):
-            up = np.where(r > 0, tau / (r if r > 0 else 1.0), 1.0)
-            down = np.where(f > 0, 1.0 - (tau - r - w) / (f if f > 0 else 1.0), 0.0)
-        frac = np.select([tau < 0, tau < r, tau < r + w, tau < r + w + f],
-                         [0.0, up, 1.0, down], 0.0)
+        tau = pulse_phase(np.asarray(t, dtype=float), self.delay, self.period)
+        frac = pulse_fraction(tau, self.rise, self.width, self.fall)
         out = self.low + (self.high - self.low) * frac
         return out if out.ndim else float(out)
 

@@ -7,6 +7,8 @@ instances at once.  The assembler only sees this interface:
 * ``params``: a :class:`Param` per parameter (slot/unit, valid range, default);
 * ``outflows(t, p, pdot)``: mass flow from each port's node *into* the element,
   shape (n, n_ports), with partials ``dq_dp`` and ``dq_dpdot`` (n, n_ports, n_ports);
+* ``flows(t, p, pdot)``: the same flows without partials, for the residual and
+  for reporting over many time points at once (override it for speed);
 * ``flow_ports``: ports through which flow can pass (a valve's control port
   passes none), used by the topology checks;
 * ``storage_ports``: ports through which the element stores mass (their nodes
@@ -116,9 +118,22 @@ class ElementFamily:
         zero = np.zeros((self.n, n_ports))
         return zero, np.zeros((self.n, n_ports, n_ports)), None
 
-    def pinned_pressure(self, t: float) -> np.ndarray:
-        """Pressures (n, len(pinned_ports)) imposed at pinned ports, kPa."""
-        return np.empty((self.n, 0))
+    def flows(self, t, p: np.ndarray, pdot: np.ndarray) -> np.ndarray:
+        """Flows out of each port's node, shape (..., n, n_ports), no partials.
+
+        ``p`` and ``pdot`` have shape (n, n_ports) with a float ``t``, or
+        (n_t, n, n_ports) with ``t`` an array of the n_t times.
+        """
+        if np.ndim(t) == 0:
+            return self.outflows(t, p, pdot)[0]
+        return np.stack([self.outflows(ti, pi, di)[0] for ti, pi, di in zip(t, p, pdot)])
+
+    def pinned_pressure(self, t) -> np.ndarray:
+        """Pressures (..., n, len(pinned_ports)) imposed at pinned ports, kPa.
+
+        ``t`` is a float, or an array of times (a leading axis in the result).
+        """
+        return np.empty(np.shape(t) + (self.n, 0))
 
     def jumps(self, t_start: float, t_stop: float) -> np.ndarray:
         """Times where an input of this family jumps (the solver restarts there)."""

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..waveforms import Constant, Pulse, pulse_fraction, pulse_phase
 from . import register
 from .base import ElementFamily, Param
 
@@ -15,13 +16,11 @@ def _waveform_times(family, method, t_start, t_stop):
 class _WaveformBank:
     """Values of many waveforms at one time: PULSE and constants vectorised.
 
-    Evaluated with the same floating-point operations as
-    :meth:`pneunet.waveforms.Pulse.value` (elementwise), so results are identical;
-    other waveforms are evaluated one by one.
+    PULSE uses the same elementwise functions as :meth:`pneunet.waveforms.Pulse.value`,
+    so results are identical; other waveforms are evaluated one by one.
     """
 
     def __init__(self, waveforms):
-        from ..waveforms import Constant, Pulse
 
         self.n = len(waveforms)
         kinds = np.array([0 if type(w) is Constant else 1 if type(w) is Pulse else 2
@@ -35,23 +34,17 @@ class _WaveformBank:
         self._other = [(i, waveforms[i]) for i in np.flatnonzero(kinds == 2)]
 
     def value(self, t):
-        out = np.empty(self.n)
-        out[self._const] = self._level
+        """Values (..., n) at time t (s): a float, or an array of times."""
+        t = np.asarray(t, dtype=float)
+        out = np.empty(t.shape + (self.n,))
+        out[..., self._const] = self._level
         if self._pulse.size:
             p = self._p
-            tau = t - p["delay"]
-            periodic = p["period"] > 0
-            wrap = periodic & (tau >= 0)
-            tau = np.where(wrap, np.mod(tau, np.where(periodic, p["period"], 1.0)), tau)
-            r, w, f = p["rise"], p["width"], p["fall"]
-            with np.errstate(divide="ignore", invalid="ignore"):
-                up = np.where(r > 0, tau / np.where(r > 0, r, 1.0), 1.0)
-                down = np.where(f > 0, 1.0 - (tau - r - w) / np.where(f > 0, f, 1.0), 0.0)
-            frac = np.select([tau < 0, tau < r, tau < r + w, tau < r + w + f],
-                             [0.0, up, 1.0, down], 0.0)
-            out[self._pulse] = p["low"] + (p["high"] - p["low"]) * frac
+            tau = pulse_phase(t[..., None], p["delay"], p["period"])
+            frac = pulse_fraction(tau, p["rise"], p["width"], p["fall"])
+            out[..., self._pulse] = p["low"] + (p["high"] - p["low"]) * frac
         for i, wave in self._other:
-            out[i] = wave.value(t)
+            out[..., i] = wave.value(t)
         return out
 
 
@@ -70,9 +63,17 @@ class PressureSource(ElementFamily):
     def __init__(self, specs, context):
         super().__init__(specs, context)
         self._waveforms = _WaveformBank([s.params["value"] for s in specs])
+        self._last_t, self._last_value = None, None
 
     def pinned_pressure(self, t):
-        return self._waveforms.value(t)[:, None]
+        if np.ndim(t):
+            return self._waveforms.value(t)[..., None]
+        if t != self._last_t:  # IDA evaluates several times at one t: evaluate the bank once
+            self._last_t, self._last_value = t, self._waveforms.value(t)[:, None]
+        return self._last_value
+
+    def flows(self, t, p, pdot):
+        return np.zeros(p.shape)
 
     def jumps(self, t_start, t_stop):
         return _waveform_times(self, "jumps", t_start, t_stop)

@@ -90,10 +90,21 @@ class MembraneValve(ElementFamily):
         dq[:, 0, :], dq[:, 1, :] = grads, -grads
         return q, dq, None
 
-    def signals(self, t, p):
+    def _flow(self, p):
+        """Flow in→out (mg/s) for pressures p (..., n, 3), without partials."""
         mdot, _ = self._analytic_flow(p, partials=False)
         for model, idx in self._custom.values():
-            mdot[:, idx] = model.flow(p[:, idx, 0], p[:, idx, 1], p[:, idx, 2])
+            mdot[..., idx] = model.flow(p[..., idx, 0], p[..., idx, 1], p[..., idx, 2])
+        return mdot
+
+    def flows(self, t, p, pdot):
+        mdot = self._flow(p)
+        q = np.zeros(p.shape)
+        q[..., 0], q[..., 1] = mdot, -mdot
+        return q
+
+    def signals(self, t, p):
+        mdot = self._flow(p)
         dp = valve_delta_p(p[..., 0], p[..., 1], p[..., 2], self._fwd["ain"], self._fwd["aout"])
         opening = valve_opening(dp, self._fwd["pclose"], self._fwd["ptrans"])
         return {"mdot": ("mg/s", mdot), "dp": ("kPa", dp), "opening": ("1", opening)}

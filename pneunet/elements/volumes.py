@@ -41,6 +41,7 @@ class Volume(ElementFamily):
         self._c0 = context.gas.capacitance(self.volume(), opts.temperature) / self._n
         p0 = self.column("p0")
         self._p_ref = np.where(np.isnan(p0), opts.ambient, p0)
+        self._isothermal = bool(np.all(self._n == 1.0))
 
     def volume(self) -> np.ndarray:
         """Volume of each instance, mL."""
@@ -48,6 +49,8 @@ class Volume(ElementFamily):
 
     def capacitance(self, p):
         """C(p) in mg/kPa and dC/dp."""
+        if self._isothermal:
+            return self._c0, 0.0
         ratio = np.maximum(p / self._p_ref, 1e-6)
         expo = 1.0 / self._n - 1.0
         c = self._c0 * ratio ** expo
@@ -56,7 +59,11 @@ class Volume(ElementFamily):
     def outflows(self, t, p, pdot):
         c, dc = self.capacitance(p[:, 0])
         q = (c * pdot[:, 0])[:, None]
-        return q, (dc * pdot[:, 0])[:, None, None], c[:, None, None]
+        dq_dp = np.broadcast_to(dc * pdot[:, 0], (self.n,))[:, None, None]
+        return q, dq_dp, np.broadcast_to(c, (self.n,))[:, None, None]
+
+    def flows(self, t, p, pdot):
+        return self.capacitance(p[..., 0])[0][..., None] * pdot
 
     def initial_pressure(self):
         return self.column("p0")
