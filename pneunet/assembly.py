@@ -235,6 +235,8 @@ class CircuitDAE:
         It is the net flow from the source's node into all other elements, from
         the pressures alone (rates of change taken as zero).
         """
+        from scipy.sparse import csr_matrix
+
         sources = self.pinned_sources()
         columns = {node: k for k, node in enumerate(dict.fromkeys(sources.values()))}
         node_cols = np.full(len(self._index), -1)
@@ -247,21 +249,40 @@ class CircuitDAE:
             if not hit.size:
                 continue
             p = full_p[:, block.port_node]
-            q = block.family.flows(times, p, np.zeros_like(p)).reshape(len(times), -1)
-            for k in np.unique(col[hit]):
-                total[:, k] += q[:, hit[col[hit] == k]].sum(axis=1)
+            q = block.family.flows(times, p, np.broadcast_to(0.0, p.shape)).reshape(len(times), -1)
+            gather = csr_matrix((np.ones(hit.size), (np.arange(hit.size), col[hit])),
+                                shape=(hit.size, len(columns)))
+            total += (gather.T @ q[:, hit].T).T
         return {name: total[:, columns[node]] for name, node in sources.items()}
 
-    def element_signals(self, t: np.ndarray, full_p: np.ndarray) -> dict[str, tuple[str, np.ndarray]]:
-        """Per-element signals over time: {'mdot_Rout': ('mg/s', array)}."""
+    def element_signals(self, block, t: np.ndarray, full_p: np.ndarray) -> dict[str, tuple[str, np.ndarray]]:
+        """One family's per-element signals over time: {'mdot_Rout': ('mg/s', array)}."""
+        fam = block.family
         out = {}
-        for block in self._blocks:
-            fam = block.family
-            for suffix, (unit, values) in fam.signals(t, full_p[:, block.port_node]).items():
-                for k, name in enumerate(fam.names):
-                    if not name.startswith("_dead_"):
-                        out[f"{suffix}_{name}"] = (unit, values[:, k])
+        for suffix, (unit, values) in fam.signals(t, full_p[:, block.port_node]).items():
+            values = np.asarray(values, dtype=float)
+            values.setflags(write=False)  # the solution keeps read-only views uncopied
+            for k, name in enumerate(fam.names):
+                if not name.startswith("_dead_"):
+                    out[f"{suffix}_{name}"] = (unit, values[:, k])
         return out
+
+    def element_signal_groups(self, t: np.ndarray, full_p: np.ndarray):
+        """Per family: (signal names, units, function computing {name: array}).
+
+        Names and units come from the family's signals at the first time point;
+        the function computes the whole history when called.
+        """
+        groups = []
+        for block in self._blocks:
+            probe = self.element_signals(block, t[:1], full_p[:1])
+            if not probe:
+                continue
+
+            def compute(block=block):
+                return {k: v for k, (_, v) in self.element_signals(block, t, full_p).items()}
+            groups.append((list(probe), [unit for unit, _ in probe.values()], compute))
+        return groups
 
     def pinned_sources(self) -> dict[str, str]:
         """{source element name: node} for the elements that pin a pressure."""

@@ -13,7 +13,7 @@ import numpy as np
 
 from .assembly import CircuitDAE
 from .errors import SolverError
-from .solution import OperatingPoint, Solution
+from .solution import LazySignals, OperatingPoint, Solution
 from .solvers.base import EVENT, FAILED, StepResult, available_backends
 from .solvers.newton import newton
 
@@ -215,18 +215,22 @@ def _failure(dae, step, times, states, branch_jumps, integrator):
 
 
 def _build_solution(dae, times, states, stats, branch_jumps) -> Solution:
+    """Node pressures now; source and element signals when first read (LazySignals)."""
     full = dae.full_pressures(times, states.reshape(len(times), dae.n))
-    signals, units = {}, {}
+    full.setflags(write=False)  # the pressure signals are views of it, handed over uncopied
+    ready, units, pending = {}, {}, {}
     for name in dae.node_names + dae.fixed_names:
         if not dae.circuit.is_reference(name):
-            signals[f"p_{name}"] = full[:, dae.node_index(name)]
+            ready[f"p_{name}"] = full[:, dae.node_index(name)]
             units[f"p_{name}"] = "kPa"
-    for source, flow in dae.source_flows(times, full).items():
-        signals[f"mdot_{source}"] = flow
-        units[f"mdot_{source}"] = "mg/s"
-    for key, (unit, values) in dae.element_signals(times, full).items():
-        signals[key] = values
-        units[key] = unit
-    for values in signals.values():  # views of arrays made here: hand them over uncopied
-        values.setflags(write=False)
-    return Solution(times, signals, units, stats, dae.circuit.title, branch_jumps)
+    sources = [f"mdot_{name}" for name in dae.pinned_sources()]
+    if sources:
+        def source_flows():
+            return {f"mdot_{name}": flow for name, flow in dae.source_flows(times, full).items()}
+        pending.update(dict.fromkeys(sources, source_flows))
+        units.update(dict.fromkeys(sources, "mg/s"))
+    for names, signal_units, compute in dae.element_signal_groups(times, full):
+        pending.update(dict.fromkeys(names, compute))
+        units.update(zip(names, signal_units))
+    return Solution(times, LazySignals(ready, pending), units, stats, dae.circuit.title,
+                    branch_jumps)

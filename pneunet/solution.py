@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from types import MappingProxyType
-from typing import Any, Mapping
+from typing import Any, Callable, Mapping
 
 import numpy as np
 
@@ -37,9 +37,44 @@ def _freeze(mapping):
     return MappingProxyType(frozen)
 
 
+class LazySignals(Mapping):
+    """Read-only signals, some of them computed in groups on first access and kept.
+
+    ``pending`` maps each deferred signal name to the function that computes its
+    whole group (e.g. all flows of one element family) as {name: array}.  Large
+    networks store thousands of element signals; most analyses read a few.
+    """
+
+    def __init__(self, ready: Mapping[str, np.ndarray],
+                 pending: Mapping[str, Callable[[], Mapping[str, np.ndarray]]]):
+        self._values = dict(_freeze(ready))
+        self._pending = dict(pending)
+        self._order = list(ready) + [k for k in pending if k not in ready]
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        if name not in self._values and name in self._pending:
+            computed = _freeze(self._pending[name]())
+            self._values.update(computed)
+            for key in computed:
+                self._pending.pop(key, None)
+        return self._values[name]
+
+    def __iter__(self):
+        return iter(self._order)
+
+    def __len__(self) -> int:
+        return len(self._order)
+
+    def __contains__(self, name) -> bool:
+        return name in self._values or name in self._pending
+
+
 @dataclass(frozen=True)
 class Solution:
     """A transient result: time points and named signals (read-only arrays).
+
+    ``signals`` is a mapping; element signals of simulated circuits are computed
+    when first read (:class:`LazySignals`).
 
     ``jumps`` lists the times of explicit jumps between solution branches
     (relaxation oscillations); the state before and after a jump are both stored.
@@ -56,7 +91,8 @@ class Solution:
         t = np.array(self.t, dtype=float)
         t.setflags(write=False)
         object.__setattr__(self, "t", t)
-        object.__setattr__(self, "signals", _freeze(self.signals))
+        if not isinstance(self.signals, LazySignals):
+            object.__setattr__(self, "signals", _freeze(self.signals))
         object.__setattr__(self, "units", MappingProxyType(dict(self.units)))
         object.__setattr__(self, "stats", MappingProxyType(dict(self.stats)))
 
