@@ -99,6 +99,10 @@ class CircuitDAE:
             block.jac_pos = pos[start:start + count]
             start += count
         self._blocks = blocks
+        self._residual_nodes = np.concatenate([b.free_nodes for b in blocks])
+        self._jacobian_positions = np.concatenate([b.jac_pos for b in blocks])
+        self._pinned = [(b.family, b.port_node[:, list(b.family.pinned_ports)])
+                        for b in blocks if b.family.pinned_ports]
 
     def sparsity(self):
         """The Jacobian's sparsity pattern as a scipy CSC matrix of ones."""
@@ -128,11 +132,8 @@ class CircuitDAE:
         full = np.empty(np.shape(y)[:-1] + (self.n + len(self.fixed_names),))
         full[..., :self.n] = y
         full[..., self._reference_idx] = self.options.ambient
-        for block in self._blocks:
-            fam = block.family
-            if fam.pinned_ports:
-                nodes = block.port_node[:, list(fam.pinned_ports)]
-                full[..., nodes] = fam.pinned_pressure(t)
+        for family, nodes in self._pinned:
+            full[..., nodes] = family.pinned_pressure(t)
         return full
 
     def evaluate(self, t, y, ydot, cj=None, absolute=False):
@@ -140,52 +141,30 @@ class CircuitDAE:
 
         With ``absolute`` a third array holds Σ|contribution| per entry (the scale
         of each entry before cancellation, used by the fold indicator).
+        Contributions of all families are summed by one bincount each.
         """
-        p, pdot = self._port_state(t, y, ydot)
-        res = np.zeros(self.n)
-        if cj is None:
-            for block in self._blocks:
-                q = block.family.flows(t, p[block.port_node], pdot[block.port_node])
-                res += self._scatter_residual(block, q)
-            return (res, None, None) if absolute else (res, None)
-        data = np.zeros(self.nnz)
-        scale = np.zeros(self.nnz) if absolute else None
-        for block in self._blocks:
-            q, dq_dp, dq_dpdot = block.family.outflows(t, p[block.port_node], pdot[block.port_node])
-            res += self._scatter_residual(block, q)
-            values = dq_dp if dq_dpdot is None else dq_dp + cj * dq_dpdot
-            values = values.ravel()[block.jac_flat]
-            data += np.bincount(block.jac_pos, weights=values, minlength=self.nnz)
-            if absolute:
-                scale += np.bincount(block.jac_pos, weights=np.abs(values), minlength=self.nnz)
-        return (res, data, scale) if absolute else (res, data)
-
-    def jacobian_parts(self, t, y, ydot):
-        """Residual and the CSC data of ∂F/∂y and of ∂F/∂ẏ, kept apart so that
-        J·v = (∂F/∂y + cj·∂F/∂ẏ)·v can be formed later for any cj."""
-        p, pdot = self._port_state(t, y, ydot)
-        res, data_y, data_ydot = np.zeros(self.n), np.zeros(self.nnz), np.zeros(self.nnz)
-        for block in self._blocks:
-            q, dq_dp, dq_dpdot = block.family.outflows(t, p[block.port_node], pdot[block.port_node])
-            res += self._scatter_residual(block, q)
-            data_y += np.bincount(block.jac_pos, weights=dq_dp.ravel()[block.jac_flat],
-                                  minlength=self.nnz)
-            if dq_dpdot is not None:
-                data_ydot += np.bincount(block.jac_pos, weights=dq_dpdot.ravel()[block.jac_flat],
-                                         minlength=self.nnz)
-        return res, data_y, data_ydot
-
-    def _port_state(self, t, y, ydot):
-        """Pressures and their rates at all nodes (unknowns first, then fixed)."""
         p = self.full_pressures(t, y)
         pdot = np.zeros_like(p)
         pdot[:self.n] = ydot
-        return p, pdot
-
-    def _scatter_residual(self, block, q):
-        """Sum a family's port flows (n, n_ports) into the unknowns' residuals."""
-        return np.bincount(block.free_nodes, weights=q.ravel()[block.free_flat],
-                           minlength=self.n)
+        flows, entries = [], []
+        for block in self._blocks:
+            if cj is None:
+                q = block.family.flows(t, p[block.port_node], pdot[block.port_node])
+            else:
+                q, dq_dp, dq_dpdot = block.family.outflows(t, p[block.port_node],
+                                                           pdot[block.port_node])
+                values = dq_dp if dq_dpdot is None else dq_dp + cj * dq_dpdot
+                entries.append(values.ravel()[block.jac_flat])
+            flows.append(q.ravel()[block.free_flat])
+        res = np.bincount(self._residual_nodes, weights=np.concatenate(flows), minlength=self.n)
+        if cj is None:
+            return (res, None, None) if absolute else (res, None)
+        entries = np.concatenate(entries)
+        data = np.bincount(self._jacobian_positions, weights=entries, minlength=self.nnz)
+        if not absolute:
+            return res, data
+        scale = np.bincount(self._jacobian_positions, weights=np.abs(entries), minlength=self.nnz)
+        return res, data, scale
 
     def jacobian(self, t, y, ydot, cj=0.0):
         """∂F/∂y + cj·∂F/∂ẏ as a scipy CSC matrix."""

@@ -96,7 +96,7 @@ def pulse_phase(t, delay, period):
     """
     tau = t - delay
     periodic = period > 0
-    return np.where(periodic & (tau >= 0), np.mod(tau, np.where(periodic, period, 1.0)), tau)
+    return np.where(periodic & (tau >= 0), np.fmod(tau, np.where(periodic, period, 1.0)), tau)
 
 
 def pulse_fraction(tau, rise, width, fall):

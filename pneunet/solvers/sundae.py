@@ -1,15 +1,20 @@
 """SUNDIALS IDA through scikit-sundae — the only module that imports sksundae.
 
 Linear algebra: small systems use IDA's dense solver with the analytic Jacobian.
-Large ones use GMRES preconditioned by an exact sparse LU factorisation of the
-analytic Jacobian (scipy's SuperLU), refactorised whenever IDA asks for a new
-Jacobian.  GMRES multiplies by the same analytic Jacobian (∂F/∂y and ∂F/∂ẏ kept
-apart, so the product uses IDA's current cj) instead of differencing the
-residual: each Newton iteration then costs one residual, one or two sparse
-products and one or two triangular solves — a modified Newton method with the
-Jacobian IDA decided to keep, as with a direct solver.  This measured several
-times faster than scikit-sundae's SuperLU_MT direct solver, whose set-up costs
-~15 ms per factorisation even at a few hundred unknowns (benchmarks/README.md).
+Large ones use a direct sparse solve driven through IDA's iterative-solver
+interface (scikit-sundae's own sparse direct solver, SuperLU_MT, costs ~15 ms
+per factorisation even at a few hundred unknowns — benchmarks/README.md):
+
+* at each Jacobian set-up IDA asks for, the analytic ∂F/∂y and ∂F/∂ẏ are
+  evaluated and P = ∂F/∂y + cj·∂F/∂ẏ is factorised with scipy's SuperLU;
+* GMRES is given the operator A = P/c, with c = 2/(1 + cj/cj_P) the correction
+  IDA applies to direct solves when cj has changed since the set-up, and P's
+  LU as preconditioner.  P⁻¹A is then c⁻¹·I: GMRES converges in one iteration
+  to x = c·P⁻¹·b, exactly IDA's modified Newton step with a direct solver.
+  P⁻¹(A·v) is returned as v/c without a second triangular solve.
+
+So each Newton iteration costs one residual, one sparse product and one LU
+solve, and the Jacobian is only re-evaluated when IDA decides so.
 """
 from __future__ import annotations
 
@@ -36,15 +41,13 @@ class SundaeIntegrator(Integrator):
         if self.dense:
             options.update(linsolver="dense", jacfn=self._jac_dense)
         else:
-            # one matrix object per part, refilled in place: building a scipy
-            # matrix validates its indices, which costs more than the data
-            self._jac_y = dae.csc(np.zeros(dae.nnz))
-            self._jac_ydot = dae.csc(np.zeros(dae.nnz))
+            # one matrix object, refilled in place: building a scipy matrix
+            # validates its indices, which costs more than the data
             self._matrix = dae.csc(np.zeros(dae.nnz))
-            self._lu = None
-            options.update(linsolver="gmres", krylov_dim=10,
+            self._lu, self._cj_setup, self._last_product = None, 1.0, (None, None)
+            options.update(linsolver="gmres", krylov_dim=5,
                            precond=ida.IDAPrecond(self._lu_setup, self._lu_solve),
-                           jactimes=ida.IDAJacTimes(None, self._jac_times))
+                           jactimes=ida.IDAJacTimes(None, self._operator))
         if events is not None:
             def eventsfn(t, y, yp, out):
                 out[0] = events(t, y)
@@ -65,16 +68,23 @@ class SundaeIntegrator(Integrator):
         from scipy.sparse.linalg import splu
 
         self.n_jac += 1
-        _, self._jac_y.data[:], self._jac_ydot.data[:] = self.dae.jacobian_parts(t, y, yp)
-        self._matrix.data[:] = self._jac_y.data + cj * self._jac_ydot.data
-        self._lu = splu(self._matrix, diag_pivot_thresh=PIVOT_THRESHOLD,
+        self._matrix.data[:] = self.dae.evaluate(t, y, yp, cj)[1]
+        self._lu = splu(self._matrix, diag_pivot_thresh=PIVOT_THRESHOLD, panel_size=1,
                         options=dict(SymmetricMode=True))
+        self._cj_setup = cj
+
+    def _operator(self, t, y, yp, res, v, av, cj):
+        """A·v with A = P/c (see the module docstring); remembers v for _lu_solve."""
+        scale = 0.5 * (1.0 + cj / self._cj_setup)  # 1/c
+        av[:] = scale * (self._matrix @ v)
+        self._last_product = (av.copy(), v / scale)
 
     def _lu_solve(self, t, y, yp, res, rvec, zvec, cj, delta):
-        zvec[:] = self._lu.solve(np.asarray(rvec))
-
-    def _jac_times(self, t, y, yp, res, v, jv, cj):
-        jv[:] = self._jac_y @ v + cj * (self._jac_ydot @ v)
+        product, solution = self._last_product
+        if product is not None and np.array_equal(rvec, product):
+            zvec[:] = solution  # P⁻¹(P·v/c) = v/c
+        else:
+            zvec[:] = self._lu.solve(np.asarray(rvec))
 
     def init(self, t, y, yp):
         result = self._solver.init_step(t, y, yp)
@@ -92,4 +102,4 @@ class SundaeIntegrator(Integrator):
     def counters(self):
         return {"residual_calls": self.n_res, "jacobian_calls": self.n_jac,
                 "linear_solver": "dense" if self.dense else
-                "GMRES with the analytic Jacobian + sparse LU preconditioner"}
+                "sparse LU (SuperLU) through GMRES, one iteration"}
