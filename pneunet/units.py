@@ -35,6 +35,22 @@ SLOTS = {
     "dimensionless": "",
 }
 
+#: common units converted without loading pint (its registry takes ~0.5 s to build):
+#: (unit, slot) -> factor to the slot's internal unit.  tests/netlist/test_units.py
+#: checks every entry against pint.
+FAST_FACTORS = {
+    **{(u, slot): f for slot in ("pressure", "pressure_difference") for u, f in (
+        ("kPa", 1.0), ("Pa", 1e-3), ("hPa", 0.1), ("MPa", 1e3), ("bar", 100.0),
+        ("mbar", 0.1), ("psi", 6.894757293168361), ("atm", 101.325))},
+    ("mg/s", "flow"): 1.0, ("g/s", "flow"): 1e3, ("kg/s", "flow"): 1e6,
+    ("kPa*s/mg", "resistance"): 1.0, ("Pa*s/mg", "resistance"): 1e-3,
+    ("mL", "volume"): 1.0, ("ml", "volume"): 1.0, ("L", "volume"): 1e3, ("l", "volume"): 1e3,
+    ("uL", "volume"): 1e-3, ("cm^3", "volume"): 1.0,
+    ("mm", "length"): 1.0, ("cm", "length"): 10.0, ("m", "length"): 1e3, ("um", "length"): 1e-3,
+    ("s", "time"): 1.0, ("ms", "time"): 1e-3, ("us", "time"): 1e-6, ("min", "time"): 60.0,
+    ("K", "temperature"): 1.0, ("Hz", "frequency"): 1.0, ("kHz", "frequency"): 1e3,
+}
+
 GAUGE_UNITS = ("kPag", "barg", "psig", "Pag", "MPag", "mbarg", "hPag", "atmg")
 _QUANTITY = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(.*?)\s*$")
 
@@ -85,6 +101,8 @@ def to_internal(value, unit: str, slot: str, *, gauge: bool = False,
         raise ParameterError(f"{name}: a gauge unit only makes sense for a pressure, got {unit}g")
     if not unit:
         converted = value
+    elif (unit, slot) in FAST_FACTORS:
+        converted = value * FAST_FACTORS[unit, slot]
     else:
         converted = _convert(value, unit, target, slot, gas, name)
     if gauge:

@@ -36,9 +36,28 @@ def split(text: str):
     return float(m.group(1)), m.group(2)
 
 
+#: scale-factor letters that are also units of a slot's dimension (``1m`` is a metre)
+SCALE_LETTER_UNITS = {("m", "length"), ("µ", "length")}  # metre, micron
+
+
 @functools.lru_cache(maxsize=512)
 def _unit_dimension_matches(unit: str, slot: str) -> bool:
-    """True if ``unit`` is a unit whose dimension fits ``slot``."""
+    """True if ``unit`` is a unit whose dimension fits ``slot``.
+
+    Common units and the scale-factor letters are decided without pint (the
+    tests check both tables against pint); anything else asks pint.
+    """
+    from ..units import FAST_FACTORS
+
+    if (unit, slot) in FAST_FACTORS:
+        return True
+    if unit.lower() in SCALE and unit == unit.lower():
+        return (unit, slot) in SCALE_LETTER_UNITS
+    return pint_dimension_matches(unit, slot)
+
+
+def pint_dimension_matches(unit: str, slot: str) -> bool:
+    """What pint says: is ``unit`` a unit whose dimension fits ``slot``?"""
     from ..units import SLOTS, registry
 
     try:
