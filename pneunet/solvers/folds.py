@@ -46,12 +46,18 @@ class FoldMonitor:
         self._indices, self._indptr = pattern.indices, pattern.indptr
 
     def _blocks(self, t, y):
-        """J_aa (CSC) and the absolute row scale of the algebraic equations."""
-        from scipy.sparse import csc_matrix
-
+        """J_aa (dense up to DENSE_BLOCK unknowns, else CSC) and the absolute row
+        scale of the algebraic equations."""
         _, data, absdata = self.dae.evaluate(t, y, np.zeros(self.dae.n), cj=0.0, absolute=True)
-        values = data[self._select][self._order]
-        jac = csc_matrix((values, self._indices, self._indptr), shape=(self.alg.size,) * 2)
+        size = self.alg.size
+        if size <= DENSE_BLOCK:
+            jac = np.zeros((size, size))
+            jac[self._rows, self._cols] = data[self._select]
+        else:
+            from scipy.sparse import csc_matrix
+
+            jac = csc_matrix((data[self._select][self._order], self._indices, self._indptr),
+                             shape=(size, size))
         scale = np.bincount(self._rows, weights=absdata[self._select], minlength=self.alg.size)
         return jac, np.maximum(scale, 1e-300)
 
@@ -116,7 +122,7 @@ class FoldMonitor:
             full = base.copy()
             full[self.alg] = ya
             j, _ = self._blocks(t, full)
-            return -(diags(inv_s) @ j)
+            return -(inv_s[:, None] * j) if isinstance(j, np.ndarray) else -(diags(inv_s) @ j)
 
         # coarse tolerances suffice: the landing point is polished by Newton below
         sol = solve_ivp(rhs, (0.0, 1e4), y[self.alg], method="BDF", jac=jac, rtol=1e-3,
@@ -137,16 +143,19 @@ DENSE_BLOCK = 40  # algebraic blocks up to this size are factorised with dense L
 
 
 def _lu_pivots(jac):
-    """Diagonal of U in an LU factorisation of ``jac`` and the original row of each."""
+    """Diagonal of U in an LU factorisation of ``jac`` (dense or CSC) and the original
+    row of each."""
     n = jac.shape[0]
-    if n <= DENSE_BLOCK:
+    if isinstance(jac, np.ndarray):
+        if n == 1:
+            return jac[0], np.zeros(1, dtype=int)
         import warnings
 
         from scipy.linalg import lu_factor
 
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # an exactly singular block has a zero pivot
-            lu, swaps = lu_factor(jac.toarray(), check_finite=False)
+            lu, swaps = lu_factor(jac, check_finite=False)
         rows = np.arange(n)
         for i, j in enumerate(swaps):
             rows[i], rows[j] = rows[j], rows[i]
