@@ -246,20 +246,21 @@ class CircuitDAE:
                     out[f"{suffix}_{name}"] = (unit, values[:, k])
         return out
 
-    def element_signal_groups(self, t: np.ndarray, full_p: np.ndarray):
+    def element_signal_groups(self, t: np.ndarray, states: np.ndarray, history):
         """Per family: (signal names, units, function computing {name: array}).
 
-        Names and units come from the family's signals at the first time point;
-        the function computes the whole history when called.
+        ``history()`` returns the full pressure history (:meth:`full_pressures`);
+        names and units come from the family's signals at the first time point.
         """
+        first = self.full_pressures(t[:1], states[:1])
         groups = []
         for block in self._blocks:
-            probe = self.element_signals(block, t[:1], full_p[:1])
+            probe = self.element_signals(block, t[:1], first)
             if not probe:
                 continue
 
             def compute(block=block):
-                return {k: v for k, (_, v) in self.element_signals(block, t, full_p).items()}
+                return {k: v for k, (_, v) in self.element_signals(block, t, history()).items()}
             groups.append((list(probe), [unit for unit, _ in probe.values()], compute))
         return groups
 
