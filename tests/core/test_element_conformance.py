@@ -2,7 +2,8 @@
 
 For each registered family: a trivial circuit using it is assembled; the
 residual has one entry per unknown node; the analytic Jacobian (∂F/∂y + cj ∂F/∂ẏ)
-matches central finite differences; the circuit reaches the steady state its
+matches central finite differences; the fast flows (no partials, batched over
+time) equal the flows returned with partials; the circuit reaches the steady state its
 physics dictates; an invalid parameter raises a ParameterError naming the element.
 A family added to the registry without an entry here fails the test.
 """
@@ -105,6 +106,27 @@ def test_residual_shape_and_jacobian_match_finite_differences(kind):
         numeric[:, j] += cj * (dae.evaluate(t, y, ydot + e)[0]
                                - dae.evaluate(t, y, ydot - e)[0]) / (2 * h)
     np.testing.assert_allclose(analytic, numeric, rtol=1e-5, atol=1e-6)
+
+
+@pytest.mark.parametrize("kind", sorted(CASES))
+def test_fast_flows_equal_outflows_at_one_time_and_over_a_history(kind):
+    """``flows`` (no partials; also batched over time) gives exactly ``outflows``' flows."""
+    circuit, _, _ = CASES[kind]()
+    dae = CircuitDAE(circuit)
+    rng = np.random.default_rng(2)
+    times = np.array([0.5, 1.2, 3.0])
+    states = rng.uniform(150.0, 350.0, (times.size, dae.n))
+    history = dae.full_pressures(times, states)
+    for block in dae._blocks:
+        fam, ports = block.family, block.port_node
+        rates = rng.normal(0.0, 50.0, (times.size,) + ports.shape)
+        batched = fam.flows(times, history[:, ports], rates)
+        for k, t in enumerate(times):
+            expected = fam.outflows(t, history[k][ports], rates[k])[0]
+            np.testing.assert_allclose(fam.flows(t, history[k][ports], rates[k]), expected,
+                                       rtol=1e-13, atol=1e-12)
+            np.testing.assert_allclose(batched[k], expected, rtol=1e-13, atol=1e-12)
+            np.testing.assert_allclose(history[k], dae.full_pressures(t, states[k]), rtol=0)
 
 
 @pytest.mark.parametrize("kind", sorted(CASES))
