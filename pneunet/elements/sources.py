@@ -21,7 +21,6 @@ class _WaveformBank:
     """
 
     def __init__(self, waveforms):
-
         self.n = len(waveforms)
         kinds = np.array([0 if type(w) is Constant else 1 if type(w) is Pulse else 2
                           for w in waveforms])
