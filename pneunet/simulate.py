@@ -14,7 +14,8 @@ import numpy as np
 from .assembly import CircuitDAE
 from .errors import SolverError
 from .solution import LazySignals, OperatingPoint, Solution
-from .solvers.base import EVENT, FAILED, StepResult, available_backends
+from .solvers import available_backends
+from .solvers.base import EVENT, FAILED, Segment
 from .solvers.newton import newton
 
 VACUUM_KPA = 0.1  # absolute pressure below which a circuit has left its physical range
@@ -81,6 +82,12 @@ def transient(circuit, t_stop: float, *, t_step: float | None = None, t_start: f
              'op': from the operating point at ``t_start``
     backend  'sksundae' (default) or 'odes' (scikits.odes, when installed)
     progress show a progress bar (tqdm) over simulated time
+
+    The integrator runs segment by segment between source breakpoints and branch
+    jumps, storing its internal steps; outputs on the ``t_step`` grid are cubic
+    Hermite interpolants of them (:mod:`pneunet.solvers.interpolate`), so the grid
+    does not set the step size.  Circuits above ``STEP_STORE_LIMIT`` unknowns let
+    IDA interpolate onto the grid itself, so that memory follows the outputs.
     """
     if not t_stop > t_start:
         raise SolverError(f"t_stop ({t_stop} s) must be after t_start ({t_start} s)")
@@ -110,82 +117,158 @@ def transient(circuit, t_stop: float, *, t_step: float | None = None, t_start: f
 
         folds = FoldMonitor(dae, opts.fold_threshold)
         folds.restart(t_start, y)
+    watch = _Watch(folds, 1e-7 * (t_stop - t_start))
     integrator = backends[name](dae, rtol=opts.rtol, atol=opts.atol, max_step=opts.max_step,
-                                events=folds.event if folds else None)
-    integrator.init(t_start, y, yp)
+                                events=watch)
 
     jumps = set(np.round(dae.jumps(t_start, t_stop), 12))
     stops = np.unique(np.concatenate([dae.breakpoints(t_start, t_stop), [t_stop]]))
     outputs = (np.append(np.arange(t_start, t_stop, t_step)[1:], t_stop) if t_step else None)
-    times, states, branch_jumps = [t_start], [y.copy()], []
+    record = _Record(t_start, y, outputs, store_steps=outputs is None or dae.n <= STEP_STORE_LIMIT)
     t = t_start
     bar = _progress(progress, t_start, t_stop)
-    out_i = 0
     retried_at = None
-    tiny_steps = 0
     try:
         while t < t_stop:
             next_stop = stops[np.searchsorted(stops, t, side="right")]
-            target = min(outputs[out_i], next_stop) if outputs is not None else next_stop
-            step = integrator.step(target, next_stop, onestep=outputs is None)
-            if step.status == FAILED and folds is not None and len(times) > 1:
-                past_fold = False
-                if retried_at != times[-1]:
+            seg = integrator.segment(t, y, yp, next_stop, record.grid_in(t, next_stop))
+            status = seg.status
+            alarm = watch.alarm(seg.t[-1], seg.y[-1]) if status == EVENT else ""
+            if alarm:
+                seg.status, seg.message = FAILED, alarm
+                record.add(t, y, yp, seg, keep_end=False)
+                raise _failure(dae, seg, t, y, record, integrator)
+            if status == FAILED and folds is not None:
+                last_t, last_y = (seg.t[-1], seg.y[-1]) if seg.t.size else (t, y)
+                record.add(t, y, yp, seg, keep_end=False)
+                if retried_at != last_t:
                     # a large step ran past a fold: restart with small steps so that
                     # the fold indicator can stop the integration in time
-                    retried_at = times[-1]
+                    retried_at = last_t
                     try:
-                        states[-1], _ = consistent_state(dae, times[-1], states[-1])
+                        y, yp = consistent_state(dae, last_t, last_y)
                     except SolverError:
-                        past_fold = True  # the branch has already ended here: jump
+                        status = EVENT  # the branch has already ended here: jump
                     else:
-                        _restart(integrator, None, dae, times[-1], states[-1])
+                        t = last_t
+                        folds.restart(t, y)
                         continue
-                if past_fold or folds.near_fold(times[-1], states[-1]):
-                    step = StepResult(EVENT, times.pop(), states.pop(),
-                                      dae.derivative(times[-1], states[-1]), step.message)
-            if step.status == FAILED:
-                raise _failure(dae, step, times, states, branch_jumps, integrator)
-            tiny_steps = tiny_steps + 1 if step.t - t < 1e-7 * (t_stop - t_start) else 0
-            stalled = tiny_steps > 1000 or (dae.n and step.y.min() < VACUUM_KPA)
-            if stalled and step.status != FAILED:
-                why = (f"a pressure fell below {VACUUM_KPA} kPa abs (vacuum)"
-                       if dae.n and step.y.min() < VACUUM_KPA else
-                       f"the time step collapsed (1000 steps below {1e-7 * (t_stop - t_start):.1e} s)")
-                raise _failure(dae, StepResult(FAILED, step.t, step.y, step.yp, why),
-                               times, states, branch_jumps, integrator)
-            t, y = step.t, step.y
-            times.append(t)
-            states.append(y.copy())
-            if step.status == EVENT:
-                t, y = folds.jump(t, y, step.yp, previous=(times[-2], states[-2]))
-                branch_jumps.append(t)
-                times.append(t)
-                states.append(y.copy())
-                _restart(integrator, folds, dae, t, y)
+                elif folds.near_fold(last_t, last_y):
+                    status = EVENT
+                if status == EVENT:
+                    seg = Segment(EVENT, np.array([last_t]), last_y[None, :],
+                                  dae.derivative(last_t, last_y)[None, :], seg.message)
+            if status == FAILED:
+                record.add(t, y, yp, seg, keep_end=False)
+                raise _failure(dae, seg, t, y, record, integrator)
+            previous = record.last() if seg.t.size < 2 else (seg.t[-2], seg.y[-2])
+            record.add(t, y, yp, seg, keep_end=True)
+            t, y, yp = seg.t[-1], seg.y[-1], seg.yp[-1]
+            if status == EVENT:
+                t, y = folds.jump(t, y, yp, previous=previous)
+                record.jump(t, y)
+                yp = dae.derivative(t, y)
+                folds.restart(t, y)
             elif round(t, 12) in jumps and t < t_stop:
-                y, _ = consistent_state(dae, t, y)
-                times.append(t)
-                states.append(y.copy())
-                _restart(integrator, folds, dae, t, y)
-            if outputs is not None:  # after a jump t may have passed further outputs
-                while out_i < len(outputs) - 1 and outputs[out_i] <= t + 1e-12:
-                    out_i += 1
+                y, yp = consistent_state(dae, t, y)
+                record.point(t, y)
+                if folds is not None:
+                    folds.restart(t, y)
             if bar is not None:
                 bar.update(t - bar.n)
     finally:
         if bar is not None:
             bar.close()
+    times, states = record.arrays()
     stats = dict(integrator.counters(), backend=integrator.name, output_points=len(times),
-                 branch_jumps=len(branch_jumps), unknowns=dae.n,
+                 branch_jumps=len(record.jumps), unknowns=dae.n,
                  algebraic=int(dae.algebraic_idx.size), wall_time_s=_time.perf_counter() - wall)
-    return _build_solution(dae, np.array(times), np.array(states), stats, tuple(branch_jumps))
+    return _build_solution(dae, times, states, stats, tuple(record.jumps))
 
 
-def _restart(integrator, folds, dae, t, y):
-    integrator.init(t, y, dae.derivative(t, y))
-    if folds is not None:
-        folds.restart(t, y)
+STEP_STORE_LIMIT = 512  # unknowns up to which internal steps are stored and interpolated
+
+
+class _Record:
+    """The rows a transient returns: output-grid points (or every internal step),
+    source stops, and the states on both sides of each branch jump."""
+
+    def __init__(self, t0, y0, outputs, store_steps):
+        self.outputs = outputs
+        self.store_steps = store_steps
+        self.chunks_t, self.chunks_y = [np.array([t0])], [y0[None, :].copy()]
+        self.emitted = t0  # outputs up to here are recorded
+        self.jumps = []
+
+    def grid_in(self, t0, t1):
+        """Output times IDA must interpolate onto in (t0, t1), or None (store steps)."""
+        if self.store_steps:
+            return None
+        return self.outputs[(self.outputs > t0) & (self.outputs < t1)]
+
+    def add(self, t0, y0, yp0, seg, keep_end):
+        """Rows of a segment started at (t0, y0, yp0); ``keep_end`` records its last row."""
+        if not seg.t.size:
+            return
+        if self.outputs is None or not self.store_steps:
+            self.chunks_t.append(seg.t)  # every row is an output or an internal step
+            self.chunks_y.append(seg.y)
+        else:
+            t_end = seg.t[-1]
+            want = self.outputs[(self.outputs > self.emitted) & (self.outputs < t_end)]
+            if want.size:
+                from .solvers.interpolate import hermite
+
+                ts = np.concatenate([[t0], seg.t])
+                self.chunks_t.append(want)
+                self.chunks_y.append(hermite(ts, np.vstack([y0, seg.y]),
+                                             np.vstack([yp0, seg.yp]), want))
+                self.emitted = want[-1]
+            if keep_end:
+                self.point(t_end, seg.y[-1])
+        if keep_end:
+            self.emitted = max(self.emitted, seg.t[-1])
+
+    def point(self, t, y):
+        self.chunks_t.append(np.array([t]))
+        self.chunks_y.append(np.array(y, dtype=float)[None, :])
+
+    def jump(self, t, y):
+        self.jumps.append(t)
+        self.point(t, y)
+        self.emitted = max(self.emitted, t)
+
+    def last(self):
+        return self.chunks_t[-1][-1], self.chunks_y[-1][-1]
+
+    def arrays(self):
+        return np.concatenate(self.chunks_t), np.concatenate(self.chunks_y)
+
+
+class _Watch:
+    """The integrator's event function: it crosses zero downwards at a fold (see
+    :class:`~pneunet.solvers.folds.FoldMonitor`), where a pressure falls to
+    VACUUM_KPA, or once 1000 steps in a row were shorter than ``tiny`` s — a
+    stalled integration — so that the compiled step loop always returns."""
+
+    def __init__(self, folds, tiny):
+        self.folds, self.tiny = folds, tiny
+        self.last_t, self.tiny_steps = -np.inf, 0
+
+    def __call__(self, t, y):
+        if t > self.last_t:  # a new step (root finding probes earlier times)
+            self.tiny_steps = self.tiny_steps + 1 if t - self.last_t < self.tiny else 0
+            self.last_t = t
+        g = min(float(y.min()) - VACUUM_KPA, 1.0 if self.tiny_steps < 1000 else -1.0)
+        return g if self.folds is None else min(g, self.folds.event(t, y))
+
+    def alarm(self, t, y) -> str:
+        """Why the integration must stop at this root ('' for a fold)."""
+        if y.min() <= VACUUM_KPA * (1 + 1e-3):
+            return f"a pressure fell below {VACUUM_KPA} kPa abs (vacuum)"
+        if self.tiny_steps >= 1000:
+            return f"the time step collapsed (1000 steps below {self.tiny:.1e} s)"
+        return ""
 
 
 def _progress(enabled, t0, t1):
@@ -197,18 +280,18 @@ def _progress(enabled, t0, t1):
                 bar_format="{l_bar}{bar}| {n:.3g}/{total:.3g} s [{elapsed}<{remaining}]")
 
 
-def _failure(dae, step, times, states, branch_jumps, integrator):
-    if not step.t >= times[-1]:  # some IDA failures report no time: use the last good one
-        step = StepResult(step.status, times[-1], states[-1],
-                          dae.derivative(times[-1], states[-1]), step.message)
-    res = dae.evaluate(step.t, step.y, step.yp)[0]
-    rate = np.abs(step.yp) / np.maximum(np.abs(step.y), 1.0)
-    worst = dae.node_names[int(np.argmax(rate + np.abs(res) + (step.y < VACUUM_KPA) * 1e300))] \
+def _failure(dae, seg, t, y, record, integrator):
+    """The SolverError of a failed segment, with the solution up to its last good row."""
+    t_fail, y_fail = (seg.t[-1], seg.y[-1]) if seg.t.size else (t, y)
+    res = dae.evaluate(t_fail, y_fail, np.zeros(dae.n))[0]
+    rate = np.abs(seg.yp[-1]) / np.maximum(np.abs(y_fail), 1.0) if seg.t.size else 0.0
+    worst = dae.node_names[int(np.argmax(rate + np.abs(res) + (y_fail < VACUUM_KPA) * 1e300))] \
         if dae.n else "?"
-    partial = _build_solution(dae, np.array(times), np.array(states),
-                              dict(integrator.counters(), failed=True), tuple(branch_jumps))
+    times, states = record.arrays()
+    partial = _build_solution(dae, times, states, dict(integrator.counters(), failed=True),
+                              tuple(record.jumps))
     return SolverError(
-        f"IDA stopped at t = {step.t:.6g} s: {step.message}", time=step.t,
+        f"IDA stopped at t = {t_fail:.6g} s: {seg.message}", time=t_fail,
         where=f"node {worst}", partial=partial,
         hint="the pressure at this node changes fastest; try a tighter rtol, a larger "
              "flow_band (.options flow_band=50), or a small dead volume (.options dead_volume=0.05mL)")

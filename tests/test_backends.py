@@ -9,7 +9,7 @@ import pytest
 from pneunet import Circuit
 from pneunet.paper_circuits import oscillator
 from pneunet.simulate import transient
-from pneunet.solvers.base import available_backends
+from pneunet.solvers import available_backends
 
 needs_odes = pytest.mark.skipif("odes" not in available_backends(),
                                 reason="scikits.odes not installed (.ci/install-odes.sh)")

@@ -1,4 +1,11 @@
-"""What a transient backend provides: an integrator of F(t, y, ẏ) = 0 with events."""
+"""What a transient backend provides: an integrator of F(t, y, ẏ) = 0 with events.
+
+The driver (:mod:`pneunet.simulate`) asks for *segments*: from a consistent state
+to the next stop (a source breakpoint or the end), every internal step stored,
+ending early at a root of the event function or at a failure.  Backends that can
+run a whole segment in compiled code override :meth:`Integrator.segment`; the
+default builds it from single steps.
+"""
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
@@ -6,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-#: step() statuses shared by all backends
+#: step() and segment() statuses shared by all backends
 OK, TSTOP, EVENT, FAILED = "ok", "tstop", "event", "failed"
 
 
@@ -14,6 +21,22 @@ OK, TSTOP, EVENT, FAILED = "ok", "tstop", "event", "failed"
 class StepResult:
     status: str
     t: float
+    y: np.ndarray
+    yp: np.ndarray
+    message: str = ""
+
+
+@dataclass
+class Segment:
+    """Accepted internal steps after a (re)start, in increasing time.
+
+    ``t`` (k,) s; ``y``, ``yp`` (k, n) kPa and kPa/s.  ``status`` is TSTOP (the stop
+    was reached: the last row is at it), EVENT (the last row is a root of the event
+    function) or FAILED (the rows are the steps before the failure).
+    """
+
+    status: str
+    t: np.ndarray
     y: np.ndarray
     yp: np.ndarray
     message: str = ""
@@ -37,25 +60,37 @@ class Integrator(ABC):
     def step(self, target: float, tstop: float, onestep: bool) -> StepResult:
         """Advance towards ``target`` without passing ``tstop``."""
 
+    def segment(self, t0: float, y0: np.ndarray, yp0: np.ndarray, t_end: float,
+                outputs: np.ndarray | None = None) -> Segment:
+        """Restart at ``t0`` and integrate to ``t_end``.
+
+        ``outputs`` None stores every internal step; else the rows are the output
+        times in (t0, t_end) (the integrator's own interpolation) and the end.
+        """
+        self.init(t0, y0, yp0)
+        targets = [t_end] if outputs is None else [*outputs, t_end]
+        k = 0
+        ts, ys, yps = [], [], []
+        while True:
+            step = self.step(targets[k], t_end, onestep=outputs is None)
+            if outputs is not None and step.status == OK and step.t >= targets[k]:
+                k += 1
+            if step.status == FAILED:
+                return _segment(FAILED, ts, ys, yps, len(y0), step.message)
+            if not ts or step.t > ts[-1]:
+                ts.append(step.t)
+                ys.append(step.y)
+                yps.append(step.yp)
+            if step.status == EVENT:
+                return _segment(EVENT, ts, ys, yps, len(y0), step.message)
+            if step.status == TSTOP or step.t >= t_end:
+                return _segment(TSTOP, ts, ys, yps, len(y0), step.message)
+
     def counters(self) -> dict:
         return {}
 
 
-def available_backends() -> dict:
-    """{name: factory} of the IDA bindings importable on this machine."""
-    import importlib.util
-
-    out = {}
-    if importlib.util.find_spec("sksundae") is not None:
-        from .sundae import SundaeIntegrator
-
-        out["sksundae"] = SundaeIntegrator
-    if importlib.util.find_spec("scikits") is not None and \
-            importlib.util.find_spec("scikits.odes") is not None:
-        try:
-            from .odes import OdesIntegrator
-        except ModuleNotFoundError:  # binding installed, pneunet adapter not present
-            pass
-        else:
-            out["odes"] = OdesIntegrator
-    return out
+def _segment(status, ts, ys, yps, n, message):
+    shape = (len(ts), n)
+    return Segment(status, np.array(ts, dtype=float), np.reshape(ys, shape),
+                   np.reshape(yps, shape), message)

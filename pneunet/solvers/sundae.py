@@ -21,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 from sksundae import ida
 
-from .base import EVENT, FAILED, OK, TSTOP, Integrator, StepResult
+from .base import EVENT, FAILED, OK, TSTOP, Integrator, Segment, StepResult
 
 DENSE_LIMIT = 40  # unknowns up to which the dense linear solver is faster
 PIVOT_THRESHOLD = 0.1  # SuperLU keeps a diagonal pivot ≥ 0.1 × the column's largest entry
@@ -90,6 +90,16 @@ class SundaeIntegrator(Integrator):
         result = self._solver.init_step(t, y, yp)
         if result.status < 0:
             raise RuntimeError(result.message)
+
+    def segment(self, t0, y0, yp0, t_end, outputs=None):
+        """The whole segment in one call: IDA's loop runs in compiled code."""
+        tspan = [t0, t_end] if outputs is None else [t0, *outputs, t_end]
+        r = self._solver.solve(np.array(tspan), y0, yp0)
+        t = np.asarray(r.t, dtype=float)
+        keep = np.flatnonzero(np.diff(t) > 0) + 1  # drop the start and repeated rows
+        status = {1: TSTOP, 2: EVENT}.get(r.status, FAILED if r.status < 0 else TSTOP)
+        return Segment(status, t[keep], np.asarray(r.y)[keep], np.asarray(r.yp)[keep],
+                       r.message)
 
     def step(self, target, tstop, onestep):
         r = self._solver.step(target, method="onestep" if onestep else "normal", tstop=tstop)
