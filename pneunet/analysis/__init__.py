@@ -1,17 +1,17 @@
 """Circuit design analyses (paper section 6): sweeps, oscillation, stationary branches,
-regime maps, fitting circuits to recorded traces, design helpers and fluid-logic checks.
+regime maps, design helpers and fluid-logic checks (fitting circuits to recorded
+traces: :mod:`pneunet.traces`).
 
 Each module returns data (dataclasses, pandas tables); ``plot_*`` functions draw it
 through :mod:`pneunet.plotting`.  Modules are imported lazily::
 
-    from pneunet.analysis import sweep, oscillation, branches, regime, fit_trace, design, logic
+    from pneunet.analysis import sweep, oscillation, branches, regime, design, logic
 """
 from __future__ import annotations
 
 import importlib
 
-_MODULES = ("sweep", "oscillation", "branches", "regime", "fit_trace", "design", "logic",
-            "circuits")
+_MODULES = ("sweep", "oscillation", "branches", "regime", "design", "logic", "circuits")
 
 
 def __getattr__(name):

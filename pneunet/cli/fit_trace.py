@@ -1,19 +1,25 @@
-"""``pneunet fit-trace``: fit circuit parameters to a recorded transient."""
+"""``pneunet fit-trace``: fit circuit parameters to a recorded transient, and with
+``--candidates`` diagnose which circuit effect the recording shows."""
 from __future__ import annotations
 
+import contextlib
 import json
+import os
+import sys
 
 
 def register(subparsers) -> None:
     p = subparsers.add_parser(
-        "fit-trace", help="fit circuit parameters (R_out, R_vent, V, ...) to a recorded transient",
+        "fit-trace", help="fit a circuit to a recorded transient; find the physics it lacks",
         description="Least squares through the simulator: vary the named parameters of a "
                     "netlist (or the built-in oscillator) until the simulated signals match a "
                     "recording in the DATA-FORMAT layout (time_s, p_<node>_kPa, "
-                    "mdot_<element>_mg_s). Reports 95 %% confidence intervals, residuals over "
-                    "time and oscillation phase, the period error, and with --candidates "
-                    "ranks circuit-level effects (polytropic volume, tubing dead volume, "
-                    "tubing resistance) by their error on the later, held-out cycles.")
+                    "mdot_<element>_mg_s); every recorded column is compared (a few samples "
+                    "around the jumps of an algebraic node are left out). With --candidates: "
+                    "the noise floor from the data, every circuit effect (heat exchange in "
+                    "volumes, dead volumes, tubes on lines, your own) fitted and ranked by the "
+                    "error on the later, held-out cycles, and a verdict: adequate, explained "
+                    "or unexplained (with where).")
     p.add_argument("data", metavar="TRACE.csv", help="recorded transient")
     p.add_argument("netlist", nargs="?", metavar="FILE.pn",
                    help="netlist (its .param values or ELEMENT.PARAM are fitted); default: the "
@@ -23,19 +29,30 @@ def register(subparsers) -> None:
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="fixed parameter value")
     p.add_argument("--signal", action="append", default=None, metavar="COLUMN",
-                   help="recorded column to fit (default: all; pressures of storage nodes fit "
-                        "best, algebraic nodes jump)")
-    p.add_argument("--node", default="tank", help="node whose period is compared (tank)")
+                   help="recorded column to fit (default: all)")
+    p.add_argument("--node", default="tank", help="node whose cycles set the phase, the period "
+                                                  "and the fit/held-out split (tank)")
     p.add_argument("--candidates", action="store_true",
-                   help="rank circuit-level effects by held-out error (slower: one fit each)")
+                   help="diagnose: rank circuit effects by held-out error, give a verdict")
+    p.add_argument("--effect", action="append", default=None, metavar="NAME",
+                   help="candidate effect (kind or bound name such as tube@X1.ctrl; repeat; "
+                        "default: all registered)")
+    p.add_argument("--effects-module", action="append", default=[], metavar="MODULE",
+                   help="import this Python module (file path or dotted name) first: it "
+                        "registers your own circuit effects")
     p.add_argument("--train-fraction", type=float, default=0.5,
                    help="fraction of the cycles used for fitting with --candidates (0.5)")
-    p.add_argument("--max-nfev", type=int, default=40,
+    p.add_argument("--max-nfev", type=int, default=30,
                    help="simulation budget of each fit's least-squares stage, Jacobian "
-                        "included (40)")
+                        "included (30)")
+    p.add_argument("--workers", type=int, default=None,
+                   help="processes for parallel finite differences (default: 2 if 2 cores)")
     p.add_argument("--plot", metavar="PNG", default=None, help="fit and residual plot")
-    p.add_argument("--json", action="store_true", help="print the result as JSON")
-    p.add_argument("--no-progress", action="store_true", help="(fits print no progress bar)")
+    p.add_argument("--waterfall", metavar="PNG", default=None,
+                   help="error waterfall plot (with --candidates)")
+    p.add_argument("--json", action="store_true",
+                   help="print only the result as JSON on stdout (solver messages: stderr)")
+    p.add_argument("--no-progress", action="store_true", help="no progress messages on stderr")
     p.set_defaults(func=main)
 
 
@@ -56,8 +73,46 @@ def _kv(items, n):
     return out
 
 
+@contextlib.contextmanager
+def stdout_to_stderr(active: bool):
+    """Send everything written to file descriptor 1 (C libraries included: SUNDIALS
+    prints its warnings there) to stderr while active."""
+    if not active:
+        yield
+        return
+    sys.stdout.flush()
+    saved = os.dup(1)
+    try:
+        os.dup2(2, 1)
+        yield
+    finally:
+        sys.stdout.flush()
+        os.dup2(saved, 1)
+        os.close(saved)
+
+
+def _load_effects(modules):
+    import importlib
+    import importlib.util
+    from pathlib import Path
+
+    from ..errors import ParameterError
+
+    for m in modules:
+        try:
+            if m.endswith(".py") or Path(m).exists():
+                spec = importlib.util.spec_from_file_location(Path(m).stem, m)
+                if spec is None:
+                    raise ImportError(m)
+                mod = importlib.util.module_from_spec(spec)
+                spec.loader.exec_module(mod)
+            else:
+                importlib.import_module(m)
+        except (ImportError, OSError, SyntaxError) as err:
+            raise ParameterError(f"cannot import effects module {m}: {err}") from None
+
+
 def main(args) -> int:
-    from ..analysis import fit_trace as F
     from ..errors import ParameterError
 
     params = _kv(args.fit, 3)
@@ -70,32 +125,65 @@ def main(args) -> int:
         build = NetlistBuilder(args.netlist)
     else:
         from ..analysis.circuits import oscillator as build
+    _load_effects(args.effects_module)
+    quiet = args.no_progress
+
+    def say(msg):
+        if not quiet:
+            print(f"fit-trace: {msg}", file=sys.stderr, flush=True)
+
+    with stdout_to_stderr(args.json):
+        out, text = _run(args, build, params, fixed, say)
+    if args.json:
+        print(json.dumps(out, indent=1, default=_json_default))
+    else:
+        print(text)
+    return 0
+
+
+def _json_default(o):
+    import numpy as np
+
+    if isinstance(o, (np.floating, np.integer)):
+        return o.item()
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    return str(o)
+
+
+def _run(args, build, params, fixed, say):
+    from ..traces import diagnose_trace, fit_trace
+    from ..traces.plots import plot_fit
+
     out = {}
     if args.candidates:
-        table, fits = F.rank_effects(build, args.data, params, fixed=fixed, node=args.node,
-                                     train_fraction=args.train_fraction, signals=args.signal,
-                                     max_nfev=args.max_nfev)
-        fit = fits["none"]
-        out["ranking"] = json.loads(table.drop(columns=["values"]).to_json(orient="records"))
-        out["ranking_values"] = {r["effect"]: r["values"] for _, r in table.iterrows()}
-        out["train_window"] = table.attrs["train_window"]
-        out["test_window"] = table.attrs["test_window"]
+        diag = diagnose_trace(build, args.data, params, fixed=fixed, signals=args.signal,
+                              node=args.node, effects=args.effect,
+                              train_fraction=args.train_fraction, max_nfev=args.max_nfev,
+                              workers=args.workers, progress=say)
+        out = diag.to_json()
+        fit = diag.final
+        text = diag.report()
+        if args.waterfall:
+            from ..traces.plots import plot_waterfall
+
+            out["waterfall_plot"] = str(plot_waterfall(diag, args.waterfall))
+            text += f"\nwaterfall -> {out['waterfall_plot']}"
     else:
-        fit = F.fit_trace(build, args.data, params, fixed=fixed, signals=args.signal,
-                          node=args.node, max_nfev=args.max_nfev)
-    out["fit"] = fit.as_dict()
+        say("fitting")
+        from ..traces.model import process_pool
+
+        pool = process_pool(args.workers)
+        try:
+            fit = fit_trace(build, args.data, params, fixed=fixed, signals=args.signal,
+                            node=args.node, max_nfev=args.max_nfev, pool=pool)
+        finally:
+            if pool is not None:
+                pool.shutdown()
+        out["fit"] = fit.as_dict()
+        text = fit.report()
     out["phase_rms"] = json.loads(fit.phase_rms.to_json(orient="records"))
     if args.plot:
-        out["plot"] = str(F.plot_fit(fit, args.data, args.plot))
-    if args.json:
-        print(json.dumps(out, indent=1, default=str))
-        return 0
-    print(fit.report())
-    if args.candidates:
-        print("\ncircuit effects ranked by held-out error (fit on the first cycles, tested on the rest):")
-        for r in out["ranking"]:
-            print(f"  {r['effect']:<20} held-out rms {r['held_out_rms']:.4g} %  "
-                  f"period error {r['period_error']:+.3g} s  improvement {100 * r['improvement']:+.1f} %")
-    if args.plot:
-        print(f"plot -> {out['plot']}")
-    return 0
+        out["plot"] = str(plot_fit(fit, args.data, args.plot))
+        text += f"\nplot -> {out['plot']}"
+    return out, text

@@ -2,8 +2,7 @@ import numpy as np
 import pytest
 
 from pneunet.analysis.circuits import oscillator
-from pneunet.analysis.fit_trace import (CANDIDATES, fit_trace, read_trace, split_by_cycles,
-                                        synthetic_trace)
+from pneunet.traces import fit_trace, read_trace, split_by_cycles, synthetic_trace
 from pneunet.errors import DataError
 
 TRUE = {"Rout": 1.132, "Rvent": 3.0, "V": 50.0}
@@ -37,7 +36,8 @@ def test_recovers_rout_rvent_and_v_inside_their_intervals(trace):
 
 def test_cycle_start_needs_no_fit():
     # the branch turning points and quadrature give R_out and R_vent within a few per cent
-    from pneunet.analysis.fit_trace import FIT_OPTIONS, TraceModel, initial_values
+    from pneunet.traces import FIT_OPTIONS, TraceModel
+    from pneunet.traces.start import initial_values
 
     tr = synthetic_trace(oscillator, TRUE, 5.0, dt=0.05, noise=0.5, seed=2, signals=("p_tank",))
     t, y = tr["time_s"].to_numpy(), tr["p_tank_kPa"].to_numpy()
@@ -62,12 +62,3 @@ def test_trace_format_is_checked(tmp_path, trace):
     assert list(read_trace(good).columns) == ["time_s", "p_tank_kPa"]
     train, test = split_by_cycles(good, "tank")
     assert train[0] == 0 and train[1] == test[0] < test[1] == pytest.approx(5.0)
-
-
-def test_candidate_effects_change_the_circuit():
-    names = [e.name for e in CANDIDATES]
-    assert names == ["polytropic_volume", "tubing_dead_volume", "tubing_resistance"]
-    for eff in CANDIDATES:
-        c = oscillator()
-        eff.apply(c, {k: v[0] for k, v in eff.params.items()})
-        assert c.tran(3.0).pressure("tank")[-1] > 150

@@ -1,0 +1,102 @@
+"""A rigid volume with a gas energy balance and finite wall heat transfer.
+
+The form of Simscape Gas' constant-volume chamber and Modelica's fluid volumes: ideal
+gas of heat-capacity ratio γ in a rigid volume V whose walls stay at the circuit's
+temperature T_w, heat flowing to the gas as Q = m·c_v·(T_w − T)/τ (τ: the gas' thermal
+time constant, s; τ → 0 is isothermal, τ → ∞ adiabatic).  The volume is filled and
+emptied through its one port; the gas entering carries the enthalpy of the circuit
+(T_w: flow through restrictions is isenthalpic), the gas leaving the volume's own:
+
+    mass     q = d/dt (p·V / (R·T))                                  [mg/s into the volume]
+    energy   V·ṗ/(γ − 1) = c_p·T_up·q + m·c_v·(T_w − T)/τ,   T_up = T_w if q ≥ 0 else T
+
+The gas temperature is a second unknown, carried at the element's second node (port
+``heat``) as the pressure-like θ = p_ref·T/T_w (kPa; p_ref = p0, or ambient), so it
+starts at θ = p_ref (T = T_w) and the assembler treats it like any storage node.
+Eliminating the mass derivative, the flow at the gas node depends on ṗ alone:
+
+    s = C·ṗ − C·p·(T_w/T − 1)/τ,   q = s/γ (s ≥ 0)   or   q = s·T_w/(γ·T) (s < 0)
+
+with C = M·V/(R·T_w) (mg/kPa); the ``heat`` node's residual is the mass balance
+q − C·(p_ref/θ)·(ṗ − p·θ̇/θ) = 0 (mg/s).  Signal ``T_<name>`` is the gas temperature, K.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from . import register
+from .base import ElementFamily, Param
+
+
+@register
+class ThermalVolume(ElementFamily):
+    """Rigid volume with gas energy balance (ports: gas node, internal temperature node)."""
+
+    kind = "thermal_volume"
+    aliases = ("VT",)
+    description = "rigid gas volume with energy balance and wall heat transfer (time constant)"
+    ports = ("node", "heat")
+    storage_ports = (0, 1)
+    params = {
+        "V": Param("volume", "volume, mL", low=0.0, low_inclusive=False),
+        "tau": Param("time", "thermal time constant of the gas, s (0+ isothermal, large "
+                     "adiabatic)", low=0.0, low_inclusive=False),
+        "gamma": Param("dimensionless", "heat-capacity ratio c_p/c_v (1.4 air)", low=1.0,
+                       high=1.67, default=1.4, low_inclusive=False),
+        "p0": Param("pressure", "initial absolute pressure, kPa (default: ambient)", low=0.0,
+                    low_inclusive=False, default=np.nan),
+    }
+
+    def __init__(self, specs, context):
+        super().__init__(specs, context)
+        opts = context.options
+        self._c = context.gas.capacitance(self.column("V"), opts.temperature)
+        self._tau = self.column("tau")
+        self._gamma = self.column("gamma")
+        p0 = self.column("p0")
+        self._p_ref = np.where(np.isnan(p0), opts.ambient, p0)
+        self._t_wall = opts.temperature
+
+    def _terms(self, p, pdot):
+        u, w = p[..., 0], p[..., 1]
+        ud, wd = pdot[..., 0], pdot[..., 1]
+        c, tau, g, pr = self._c, self._tau, self._gamma, self._p_ref
+        heat = c * u * (pr / w - 1.0) / tau
+        s = c * ud - heat
+        k = np.where(s >= 0, 1.0, pr / w)  # T_w / T_up
+        q = k * s / g
+        mass = c * pr * (ud / w - u * wd / w ** 2)
+        return u, w, ud, wd, s, k, q, mass
+
+    def flows(self, t, p, pdot):
+        *_, q, mass = self._terms(p, pdot)
+        return np.stack([q, q - mass], axis=-1)
+
+    def outflows(self, t, p, pdot):
+        u, w, ud, wd, s, k, q, mass = self._terms(p, pdot)
+        c, tau, g, pr = self._c, self._tau, self._gamma, self._p_ref
+        dheat_du = c * (pr / w - 1.0) / tau
+        dheat_dw = -c * u * pr / (tau * w ** 2)
+        # q = k·s/γ; k depends on w only where s < 0
+        dk_dw = np.where(s >= 0, 0.0, -pr / w ** 2)
+        dq_du = -k * dheat_du / g
+        dq_dw = (-k * dheat_dw + dk_dw * s) / g
+        dq_dud = k * c / g
+        cp = c * pr
+        dm_du, dm_dw = -cp * wd / w ** 2, cp * (-ud / w ** 2 + 2 * u * wd / w ** 3)
+        dm_dud, dm_dwd = cp / w, -cp * u / w ** 2
+        n = self.n
+        dq_dp = np.zeros((n, 2, 2))
+        dq_dpdot = np.zeros((n, 2, 2))
+        dq_dp[:, 0, 0], dq_dp[:, 0, 1] = dq_du, dq_dw
+        dq_dp[:, 1, 0], dq_dp[:, 1, 1] = dq_du - dm_du, dq_dw - dm_dw
+        dq_dpdot[:, 0, 0] = dq_dud
+        dq_dpdot[:, 1, 0], dq_dpdot[:, 1, 1] = dq_dud - dm_dud, -dm_dwd
+        return np.stack([q, q - mass], axis=-1), dq_dp, dq_dpdot
+
+    def initial_pressure(self):
+        # both unknowns start at p_ref: the gas node at p0, θ at p_ref (T = T_w)
+        return self.column("p0")
+
+    def signals(self, t, p):
+        return {"T": ("K", self._t_wall * p[..., 1] / self._p_ref)}

@@ -1,0 +1,275 @@
+"""Circuit effects: physics a recording may show that the netlist lacks.
+
+An effect adds free parameters ({name: (guess, low, high)}, positive, fitted in log
+space) and edits a built circuit in place (``apply(circuit, values)``).  An effect
+*kind* may act at many sites of a circuit; ``candidates(circuit)`` returns one bound
+effect per site (a dead volume at each node, a tube on each line).
+
+Built in, each in its published forms:
+
+* heat exchange in volumes: the static polytropic exponent n (1 isothermal … 1.4
+  adiabatic), and the gas energy balance with wall heat transfer of time constant τ
+  (Simscape Gas / Modelica volumes; :mod:`pneunet.elements.thermal`);
+* a dead volume at any node without one (tubing, fittings, valve cavities);
+* a tube on any line, control lines included: a resistance R and a volume V between a
+  node and the element port it feeds (on a volume's own line, R alone).
+
+Your own: subclass :class:`CircuitEffect` (or give a netlist fragment with free
+parameters, :class:`NetlistEffect`) and :func:`register` it; see docs/diagnose.md.
+"""
+from __future__ import annotations
+
+import copy
+
+from ..errors import ParameterError
+
+STORAGE_KINDS = ("volume", "actuator", "thermal_volume")
+
+
+class CircuitEffect:
+    """Base class of circuit effects.
+
+    Set ``name`` (unique id), ``family`` (the physics) and ``form`` (which published
+    form), ``description``, ``params`` {name: (guess, low, high)} with the guess a typical
+    amount of the effect (the screen starts there), and implement
+    :meth:`apply`.  Override :meth:`candidates` when the effect acts at sites.
+    """
+
+    name = ""
+    family = ""
+    form = ""
+    description = ""
+    params: dict = {}
+
+    def candidates(self, circuit) -> list["CircuitEffect"]:
+        """The bound effects this kind offers for ``circuit`` (default: itself)."""
+        return [self]
+
+    def apply(self, circuit, values: dict) -> None:
+        """Edit ``circuit`` in place with parameter ``values``."""
+        raise NotImplementedError
+
+    def to_json(self) -> dict:
+        return {"effect": self.name, "family": self.family, "form": self.form,
+                "description": self.description,
+                "params": {k: list(v) for k, v in self.params.items()}}
+
+    def __repr__(self):
+        return f"{type(self).__name__}({self.name!r})"
+
+
+def _storage(circuit):
+    return [s for s in circuit.elements.values() if s.kind in STORAGE_KINDS]
+
+
+class PolytropicVolume(CircuitEffect):
+    """Every volume compresses polytropically with one exponent n."""
+
+    name = "polytropic_volume"
+    family = "heat exchange in volumes"
+    form = "static polytropic exponent n (1 isothermal … 1.4 adiabatic)"
+    description = "volumes exchange only part of their compression heat (p·V^n constant)"
+    params = {"n": (1.2, 1.0, 1.4)}
+
+    def candidates(self, circuit):
+        return [self] if any(s.kind in ("volume", "actuator") for s in _storage(circuit)) else []
+
+    def apply(self, circuit, values):
+        for spec in _storage(circuit):
+            if spec.kind in ("volume", "actuator"):
+                spec.params["n"] = float(values["n"])
+
+
+class VolumeHeatTransfer(CircuitEffect):
+    """Every volume with a gas energy balance and wall heat transfer of time constant τ."""
+
+    name = "volume_heat_transfer"
+    family = "heat exchange in volumes"
+    form = "gas energy balance with wall heat transfer, time constant τ (Simscape/Modelica)"
+    description = "gas temperature in the volumes follows compression and relaxes to the wall"
+    params = {"tau": (0.3, 0.002, 50.0)}
+
+    def candidates(self, circuit):
+        return [self] if any(s.kind in ("volume", "actuator") for s in _storage(circuit)) else []
+
+    def apply(self, circuit, values):
+        import numpy as np
+
+        from ..elements import thermal  # noqa: F401  (registers thermal_volume)
+
+        for spec in list(_storage(circuit)):
+            if spec.kind not in ("volume", "actuator"):
+                continue
+            p = spec.params
+            V = p["V"]
+            if spec.kind == "actuator" and np.isnan(V):
+                V = np.pi / 4 * p["diameter"] ** 2 * p["length"] * 1e-3
+            del circuit.elements[spec.name]
+            circuit.add("thermal_volume", spec.name, (spec.nodes[0], f"{spec.name}__T"),
+                        V=float(V), tau=float(values["tau"]),
+                        p0=None if np.isnan(p["p0"]) else float(p["p0"]))
+
+
+class DeadVolume(CircuitEffect):
+    """A volume at a node that has none (tubing, fittings, a valve cavity)."""
+
+    name = "dead_volume"
+    family = "dead volume"
+    form = "isothermal volume V at a node"
+    description = "gas volume at a node the netlist models without storage"
+    params = {"V_dead": (2.0, 0.01, 200.0)}
+
+    def __init__(self, node: str | None = None):
+        self.node = node
+        if node is not None:
+            self.name = f"dead_volume@{node}"
+            self.params = {f"V_dead@{node}": DeadVolume.params["V_dead"]}
+
+    def candidates(self, circuit):
+        from .. import elements
+
+        stored, pinned = set(), set()
+        for s in circuit.elements.values():
+            fam = elements.family(s.kind)
+            stored.update(s.nodes[p] for p in fam.storage_ports)
+            pinned.update(s.nodes[p] for p in fam.pinned_ports)
+        return [DeadVolume(n) for n in circuit.nodes
+                if n not in stored and n not in pinned and not circuit.is_reference(n)]
+
+    def apply(self, circuit, values):
+        if self.node is None:
+            raise ParameterError("dead_volume: bind it to a node (DeadVolume('out'))")
+        circuit.volume(f"Vdead_{self.node}", self.node, V=float(values[f"V_dead@{self.node}"]))
+
+
+class Tube(CircuitEffect):
+    """A tube (resistance + volume) on the line from a node to an element's port."""
+
+    name = "tube"
+    family = "tube on a line"
+    form = "quadrature resistance R then volume V at the element's port"
+    description = "tubing between a node and the port it feeds (control lines included)"
+    params = {"R_tube": (0.1, 0.002, 10.0), "V_tube": (2.0, 0.01, 200.0)}
+
+    def __init__(self, element: str | None = None, port: str | None = None,
+                 with_volume: bool = True):
+        self.element, self.port, self.with_volume = element, port, with_volume
+        if element is not None:
+            site = f"{element}.{port}"
+            self.name = f"tube@{site}"
+            self.params = {f"R_tube@{site}": Tube.params["R_tube"]}
+            if with_volume:
+                self.params[f"V_tube@{site}"] = Tube.params["V_tube"]
+
+    def candidates(self, circuit):
+        from .. import elements
+
+        out = []
+        for s in circuit.elements.values():
+            fam = elements.family(s.kind)
+            if fam.pinned_ports or len(fam.ports) != len(s.nodes):
+                continue
+            for k, port in enumerate(fam.ports):
+                if port == "heat":
+                    continue
+                # a tube before a volume: its own volume merges with the vessel's
+                out.append(Tube(s.name, port, with_volume=k not in fam.storage_ports))
+        return out
+
+    def apply(self, circuit, values):
+        from .. import elements
+
+        if self.element is None:
+            raise ParameterError("tube: bind it to a line (Tube('X1', 'ctrl'))")
+        spec = circuit.elements[self.element]
+        k = elements.family(spec.kind).ports.index(self.port)
+        site = f"{self.element}.{self.port}"
+        node = spec.nodes[k]
+        inner = f"{node}__{self.element}_{self.port}"
+        nodes = list(spec.nodes)
+        nodes[k] = inner
+        spec.nodes = tuple(nodes)
+        circuit.resistor(f"Rtube_{self.element}_{self.port}", node, inner,
+                         R=float(values[f"R_tube@{site}"]))
+        if self.with_volume:
+            circuit.volume(f"Vtube_{self.element}_{self.port}", inner,
+                           V=float(values[f"V_tube@{site}"]))
+
+
+class NetlistEffect(CircuitEffect):
+    """An effect written as a netlist fragment whose ``.param`` values are fitted.
+
+    ``fragment`` is netlist text (``.param`` lines with defaults, then elements using
+    ``{name}``), naming nodes of the base circuit; its elements are added to it.
+    ``params`` {name: (guess, low, high)} are the fragment parameters to fit."""
+
+    def __init__(self, name: str, fragment: str, params: dict, description: str = "",
+                 family: str = "user", form: str = "netlist fragment"):
+        self.name, self.fragment, self.params = name, fragment, dict(params)
+        self.description, self.family, self.form = description, family, form
+
+    def apply(self, circuit, values):
+        from ..errors import TopologyError
+        from ..netlist import parse_netlist
+
+        deck = parse_netlist(self.fragment, name=f"<effect {self.name}>",
+                             overrides={k: float(v) for k, v in values.items()})
+        for spec in deck.circuit.elements.values():
+            if spec.name in circuit.elements:
+                raise TopologyError(f"effect {self.name}: element {spec.name} already exists "
+                                    "in the circuit", hint="rename it in the fragment")
+            circuit.elements[spec.name] = copy.deepcopy(spec)
+
+
+_REGISTRY: dict[str, CircuitEffect] = {}
+
+
+def register(effect):
+    """Make a circuit effect (an instance, or a class with a no-argument constructor)
+    a default candidate of every trace diagnosis; returns it (usable as decorator)."""
+    inst = effect() if isinstance(effect, type) else effect
+    if not isinstance(inst, CircuitEffect) or not inst.name:
+        raise ParameterError(f"{effect!r} is not a named CircuitEffect")
+    _REGISTRY[inst.name] = inst
+    return effect
+
+
+def unregister(name: str) -> None:
+    """Remove a registered effect (for tests and notebooks)."""
+    _REGISTRY.pop(name, None)
+
+
+def registered_effects() -> list[CircuitEffect]:
+    """The registered effect kinds, built-in first."""
+    return list(_REGISTRY.values())
+
+
+def candidates_for(circuit, effects=None) -> list[CircuitEffect]:
+    """Bound candidate effects for ``circuit``: from ``effects`` (kinds or bound
+    effects; default all registered), expanded to their sites, names unique."""
+    kinds = registered_effects() if effects is None else list(effects)
+    every = None
+    out, seen = [], set()
+    for kind in kinds:
+        if isinstance(kind, str):
+            if kind in _REGISTRY:
+                bound = _REGISTRY[kind].candidates(circuit)
+            else:  # a bound name such as tube@X1.ctrl
+                if every is None:
+                    every = {e.name: e for k in _REGISTRY.values() for e in k.candidates(circuit)}
+                if kind not in every:
+                    raise ParameterError(f"unknown circuit effect {kind!r}",
+                                         hint="known: " + ", ".join(sorted(set(_REGISTRY)
+                                                                          | set(every))))
+                bound = [every[kind]]
+        else:
+            bound = kind.candidates(circuit)
+        for eff in bound:
+            if eff.name not in seen:
+                seen.add(eff.name)
+                out.append(eff)
+    return out
+
+
+for _kind in (PolytropicVolume, VolumeHeatTransfer, DeadVolume, Tube):
+    register(_kind)

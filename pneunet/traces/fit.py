@@ -1,0 +1,247 @@
+"""Fit a circuit to a recorded transient: least squares through the simulator.
+
+The unknown parameters (e.g. R_out, R_vent and V of the oscillator, and the parameters
+of circuit effects) are varied in log space within bounds until the simulated signals
+match the recorded ones at the recorded times, on a fit window (the first cycles).
+Every recorded column is compared; around the jumps of an algebraic node (p_out at a
+fold) a few samples are left out (:func:`~pneunet.traces.data.compared_samples`).
+Intervals come from :func:`pneunet.truth.intervals.intervals` (white residuals, or
+Newey–West and why).  The solution over the whole record gives the held-out error.
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from ..errors import DataError, ParameterError, PneunetError
+from ..truth.intervals import intervals
+from ..truth.lsq import least_squares_log
+from .data import compared_samples, read_trace, signal_of_column
+from .model import DIFF_STEP, FIT_OPTIONS, TraceModel, TraceResidual, sample_at
+
+
+@dataclass
+class TraceFit:
+    """Result of :func:`fit_trace`.
+
+    ``values``, ``ci`` ({name: (low, high)}), ``stderr_log`` (standard error of ln
+    value), ``rmse`` per signal in the fit window (kPa or mg/s, compared samples),
+    ``residuals`` (DataFrame: time_s, phase, fitted, one column per signal, NaN where
+    not compared), ``phase_rms`` (phase bin centre, rms per signal),
+    ``period_measured``/``period_simulated``/``period_error`` (s, at ``node``),
+    ``unit`` ('kPa' or '% of range') and ``scales`` (signal → divisor giving that
+    unit), ``solution`` (the simulation with the estimates over the whole record).
+    """
+
+    values: dict
+    ci: dict
+    stderr_log: dict
+    rmse: dict
+    residuals: object
+    phase_rms: object
+    period_measured: float
+    period_simulated: float
+    period_error: float
+    sigma: float
+    nfev: int
+    success: bool
+    message: str
+    effects: tuple = ()
+    solution: object = None
+    wall_time_s: float = 0.0
+    unit: str = "kPa"
+    scales: dict = field(default_factory=dict)
+    extras: dict = field(default_factory=dict)
+
+    def signals(self) -> list[str]:
+        return [c for c in self.residuals.columns if c not in ("time_s", "phase", "fitted")]
+
+    def error(self, window=None) -> float:
+        """Pooled rms of the scaled residuals (in ``unit``) on the compared samples in
+        ``window`` (default: the fit window)."""
+        r = self.residuals
+        t = r["time_s"].to_numpy()
+        sel = r["fitted"].to_numpy() if window is None else (t >= window[0]) & (t <= window[1])
+        parts = [r[s].to_numpy()[sel] / self.scales.get(s, 1.0) for s in self.signals()]
+        v = np.concatenate(parts)
+        v = v[np.isfinite(v)]
+        return float(np.sqrt(np.mean(v ** 2))) if v.size else float("nan")
+
+    def as_dict(self) -> dict:
+        return {"values": self.values, "ci": {k: list(v) for k, v in self.ci.items()},
+                "rmse": self.rmse, "period_measured": self.period_measured,
+                "period_simulated": self.period_simulated, "period_error": self.period_error,
+                "sigma": self.sigma, "nfev": self.nfev, "success": self.success,
+                "message": self.message, "effects": [e.name for e in self.effects],
+                "wall_time_s": self.wall_time_s, "unit": self.unit,
+                **{k: v for k, v in self.extras.items() if k != "stage1"}}
+
+    def report(self) -> str:
+        lines = ["parameter        estimate      95 % CI"]
+        for k, v in self.values.items():
+            lo, hi = self.ci[k]
+            lines.append(f"  {k:<14} {v:>10.5g}   [{lo:.5g}, {hi:.5g}]")
+        lines.append("rms residual: " + ", ".join(f"{k} {v:.3g}" for k, v in self.rmse.items()))
+        if math.isfinite(self.period_error):
+            lines.append(f"period: measured {self.period_measured:.4g} s, simulated "
+                         f"{self.period_simulated:.4g} s, error {self.period_error:+.3g} s")
+        note = self.extras.get("intervals", {}).get("note")
+        if note:
+            lines.append(f"intervals: {note}")
+        return "\n".join(lines)
+
+
+def phase_of(t, y, level=None):
+    """Oscillation phase in [0, 1) of each time from the rising crossings of ``y``."""
+    from ..analysis.oscillation import _rising_crossings
+
+    if level is None:
+        level = 0.5 * (np.min(y) + np.max(y))
+    rises = _rising_crossings(np.asarray(t), np.asarray(y), level)
+    phase = np.full(len(t), np.nan)
+    for a, b in zip(rises[:-1], rises[1:]):
+        inside = (t >= a) & (t < b)
+        phase[inside] = (t[inside] - a) / (b - a)
+    return phase
+
+
+def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None, signals=None,
+              node: str | None = None, window=None, effects=(), max_nfev: int = 40,
+              confidence: float = 0.95, phase_bins: int = 20, start: str = "ic",
+              features: bool = True, diff_step: float = DIFF_STEP, options: dict | None = None,
+              pool=None, x_start: dict | None = None, where: str | None = None) -> TraceFit:
+    """Estimate ``params`` ({name: (guess, low, high)}) so the circuit reproduces ``data``.
+
+    ``build(point) -> Circuit`` (or a :class:`~pneunet.analysis.sweep.NetlistBuilder`)
+    with ``fixed`` values for the other parameters; ``signals``: recorded columns to fit
+    (default: all); ``node``: the node whose period is compared (default: the first
+    pressure signal); ``window`` = (t0, t1) the fitted samples; ``effects``: circuit
+    effects added (their parameters may appear in ``params``); ``options``: simulator
+    options (default :data:`~pneunet.traces.model.FIT_OPTIONS`); ``max_nfev``: cap on
+    the simulations of the least-squares stage (Jacobian included); ``pool``: an
+    executor for the Jacobian's columns; ``x_start``: starting values (skips the
+    cycle stage).
+
+    Two stages: with ``features`` and an oscillating record at ``node``, starting
+    values from the cycle (:mod:`pneunet.traces.start`); then Levenberg–Marquardt on
+    the samples in ln-parameters.  Signals are compared in kPa when all are pressures,
+    else in % of each signal's range.
+    """
+    from .start import _feature_fit, initial_values
+
+    wall = time.perf_counter()
+    where = where or (str(data) if not hasattr(data, "columns") else "trace")
+    df = read_trace(data, signals)
+    cols = [c for c in df.columns if c != "time_s"]
+    sigs = [signal_of_column(c) for c in cols]
+    times = df["time_s"].to_numpy()
+    meas = {s: df[c].to_numpy() for s, c in zip(sigs, cols)}
+    mask = np.ones(len(times), bool)
+    if window is not None:
+        mask = (times >= window[0]) & (times <= window[1])
+    if mask.sum() < 5:
+        raise DataError("fewer than 5 samples in the fit window", where=where)
+    names = list(params)
+    for k in names:
+        g, lo, hi = params[k]
+        if not 0 < lo <= g <= hi:
+            raise ParameterError(f"fit parameter {k}: need 0 < low ≤ guess ≤ high, got {params[k]}")
+    model = TraceModel(build, fixed, effects, start, FIT_OPTIONS if options is None else options)
+    check_signals(model, {k: v[0] for k, v in params.items()}, cols, where)
+    x0 = np.log([params[k][0] for k in names])
+    lb = np.log([params[k][1] for k in names])
+    ub = np.log([params[k][2] for k in names])
+    unit = "kPa" if all(s.startswith("p_") for s in sigs) else "% of range"
+    scales = {s: 1.0 if unit == "kPa" else max(np.ptp(meas[s]), 1e-9) / 100.0 for s in sigs}
+    keep_all = {s: compared_samples(meas[s]) for s in sigs}
+    t_fit = times[mask]
+    fun = TraceResidual(model, names, t_fit, sigs, {s: meas[s][mask] for s in sigs},
+                        {s: keep_all[s][mask] for s in sigs}, scales)
+    node = node or next((s[2:] for s in sigs if s.startswith("p_")), None)
+    stage1 = None
+    if x_start is not None:
+        x0 = np.clip(np.log([x_start.get(k, params[k][0]) for k in names]), lb, ub)
+        stage1 = {"method": "given"}
+    elif features and node and f"p_{node}" in meas:
+        try:
+            x0, stage1 = initial_values(model, names, x0, lb, ub, t_fit, meas[f"p_{node}"][mask],
+                                        node)
+        except PneunetError as err:
+            stage1 = {"method": "none", "error": str(err)}
+        if stage1 is None or stage1.get("method") == "none":
+            x0, stage1 = _feature_fit(model, names, x0, lb, ub, t_fit, meas[f"p_{node}"][mask],
+                                      node, max_nfev)
+    calls0 = model.calls
+    res = least_squares_log(fun, x0, lb, ub, max_nfev=max_nfev, diff_step=diff_step, pool=pool)
+    est = dict(zip(names, np.exp(res.x)))
+    groups = np.concatenate([np.full(int(fun.keep[s].sum()), i) for i, s in enumerate(sigs)])
+    ci, se, info = intervals(res.x, res.jac, res.fun, names, groups=groups,
+                             confidence=confidence)
+    import pandas as pd
+
+    sim, sol = model.sample(est, times, sigs)
+    ref = meas[f"p_{node}"] if node and f"p_{node}" in meas else meas[sigs[0]]
+    phase = phase_of(times, ref)
+    resid = {s: np.where(keep_all[s], sim[s] - meas[s], np.nan) for s in sigs}
+    frame = pd.DataFrame({"time_s": times, "phase": phase, "fitted": mask, **resid})
+    rmse = {s: float(np.sqrt(np.nanmean(resid[s][mask] ** 2))) for s in sigs}
+    from ..truth.locate import phase_profile
+
+    rows = {"phase": None}
+    for s in sigs:
+        centre, rms = phase_profile(phase[mask], resid[s][mask], phase_bins)
+        rows["phase"], rows[s] = centre, rms
+    phase_rms = pd.DataFrame(rows)
+    pm, ps, perr = period_error(times, ref, sol, node, mask)
+    nfev = calls0 + res.nfev
+    return TraceFit(est, ci, se, rmse, frame, phase_rms, pm, ps, perr, float(info["s"]),
+                    int(nfev), res.success,
+                    res.message + (f"; {fun.failures} failed simulations" if fun.failures else ""),
+                    tuple(effects), sol, time.perf_counter() - wall, unit, scales,
+                    {"stage1": stage1, "simulations": nfev, "intervals": info,
+                     "compared": {s: int(keep_all[s].sum()) for s in sigs}})
+
+
+def check_signals(model: TraceModel, values: dict, columns, where: str) -> None:
+    """DataError when a recorded column names a node or element the circuit lacks."""
+    c = model.circuit(values)
+    nodes, elements = set(c.nodes), set(c.elements)
+    for col in columns:
+        sig = signal_of_column(col)
+        if sig.startswith("p_") and sig[2:] not in nodes:
+            raise DataError(f"column {col}: the circuit has no node {sig[2:]!r}", where=where,
+                            hint="nodes: " + ", ".join(sorted(nodes)) + "; rename the column "
+                                 "or leave it out with --signal")
+        if sig.startswith("mdot_") and sig[5:] not in elements:
+            raise DataError(f"column {col}: the circuit has no element {sig[5:]!r}",
+                            where=where, hint="elements: " + ", ".join(sorted(elements)))
+
+
+def period_error(times, ref, sol, node, mask):
+    """(measured, simulated, simulated − measured) period at ``node`` in ``mask``, s."""
+    from ..analysis.oscillation import analyze_oscillation
+    from .start import cycle_features
+
+    w = mask
+    try:
+        m = analyze_oscillation(times[w], ref[w])
+        sim_t = sol.t
+        inside = (sim_t >= times[w][0]) & (sim_t <= times[w][-1])
+        s = analyze_oscillation(sim_t[inside], sol.pressure(node)[inside]) if node else m
+        if m.oscillating and s.oscillating:
+            return m.period_s, s.period_s, s.period_s - m.period_s
+        fm = cycle_features(times[w], ref[w])
+        fs = cycle_features(sim_t[inside], sol.pressure(node)[inside],
+                            fm["levels"] if fm else None) if node else None
+        if fm and fs:
+            return fm["period"], fs["period"], fs["period"] - fm["period"]
+        return m.period_s, s.period_s, float("nan")
+    except PneunetError:
+        return float("nan"), float("nan"), float("nan")
+
+
+__all__ = ["TraceFit", "fit_trace", "phase_of", "period_error", "check_signals", "sample_at"]
