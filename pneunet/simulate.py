@@ -128,10 +128,12 @@ def transient(circuit, t_stop: float, *, t_step: float | None = None, t_start: f
     t = t_start
     bar = _progress(progress, t_start, t_stop)
     retried_at = None
+    steps = 0
     try:
         while t < t_stop:
             next_stop = stops[np.searchsorted(stops, t, side="right")]
             seg = integrator.segment(t, y, yp, next_stop, record.grid_in(t, next_stop))
+            steps += seg.t.size
             status = seg.status
             alarm = watch.alarm(seg.t[-1], seg.y[-1]) if status == EVENT else ""
             if alarm:
@@ -180,7 +182,8 @@ def transient(circuit, t_stop: float, *, t_step: float | None = None, t_start: f
         if bar is not None:
             bar.close()
     times, states = record.arrays()
-    stats = dict(integrator.counters(), backend=integrator.name, output_points=len(times),
+    stats = dict(integrator.counters(), backend=integrator.name, steps=steps,
+                 output_points=len(times),
                  branch_jumps=len(record.jumps), unknowns=dae.n,
                  algebraic=int(dae.algebraic_idx.size), wall_time_s=_time.perf_counter() - wall)
     return _build_solution(dae, times, states, stats, tuple(record.jumps))
