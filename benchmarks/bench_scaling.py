@@ -145,44 +145,70 @@ def _sr(a, b, band):
     return f"{d}/pwr({d}*{d}+{band * band:.10g},0.25)"
 
 
-def spice_netlist(circuit, reltol, t_step, t_stop=T_STOP):
-    """The circuit as a SPICE deck: kPa as volts, mg/s as amperes, mg/kPa as farads."""
+def spice_name(node: str) -> str:
+    """A node name SPICE accepts (references become ``atm``)."""
+    return "atm" if node in ("0", "gnd", "atm") else re.sub(r"[^A-Za-z0-9_]", "_", node)
+
+
+def _valve_conductance(v, i, o, c):
+    """SPICE expression of the valve conductance G(Δp) (eq. 19) for ValveParams ``v``."""
+    hi, lo = f"max(v({i}),v({o}))", f"min(v({i}),v({o}))"
+    u = (f"max({v.ain:.10g}*{hi}+{v.aout:.10g}*{lo}-v({c})-{v.pclose:.10g},0)"
+         f"/{v.ptrans - v.pclose:.10g}")
+    ue = f"pwr({u},{v.e:.10g})"  # never a parameter named e: SPICE reads it as 2.718
+    return f"{ue}/({v.Rf:.10g}*sqrt(1+{ue}*{ue}))"
+
+
+def spice_netlist(circuit, reltol, t_step, t_stop=T_STOP, dead_capacitance=0.0):
+    """The circuit as a SPICE deck: kPa as volts, mg/s as amperes, mg/kPa as farads.
+
+    Volumes and actuators (isothermal) are capacitors, resistors and valves
+    B-sources with the same regularised root; a valve with a ``backward`` model
+    switches parameters where p_out > p_in, as pneunet does.  ``dead_capacitance``
+    (mg/kPa) adds a capacitor at every unknown node without a volume (ngspice
+    cannot step across the folds of an algebraic node).  Every unknown node starts
+    (``uic``) at pneunet's consistent initial state.
+    """
     from pneunet.assembly import CircuitDAE
+    from pneunet.simulate import consistent_state
 
     dae = CircuitDAE(circuit)
+    y0, _ = consistent_state(dae, 0.0, dae.initial_state(0.0))
     band = circuit.options.flow_band
-    cap = dae.capacitance(0.0, dae.initial_state(0.0))
-    node = {name: name for name in circuit.nodes}
-    for ref in ("0", "gnd", "atm"):
-        node[ref] = "atm"
+    gas, temperature = circuit.options.gas_model, circuit.options.temperature
     lines = [f"* {circuit.title}", f"VATM atm 0 {circuit.options.ambient}"]
-    ics = []
+    stored = set()
     for e in circuit.elements.values():
         p = e.params
-        nd = [node[x] for x in e.nodes]
+        nd = [spice_name(x) for x in e.nodes]
+        name = spice_name(e.name)
         if e.kind == "pressure_source":
             w = p["value"]
             src = w.netlist() if hasattr(w, "netlist") else f"DC {w}"
-            lines.append(f"V{e.name} {nd[0]} 0 {src}")
+            lines.append(f"V{name} {nd[0]} 0 {src}")
         elif e.kind == "resistor":
-            lines.append(f"B{e.name} {nd[0]} {nd[1]} I={_sr(nd[0], nd[1], band)}/{p['R']:.10g}")
-        elif e.kind == "volume":
-            i = dae.node_index(e.nodes[0])
-            lines.append(f"C{e.name} {nd[0]} 0 {cap[i]:.10g}")
-            p0 = p["p0"] if np.isfinite(p["p0"]) else circuit.options.ambient
-            ics.append(f"v({nd[0]})={p0:.10g}")
+            lines.append(f"B{name} {nd[0]} {nd[1]} I={_sr(nd[0], nd[1], band)}/{p['R']:.10g}")
+        elif e.kind in ("volume", "actuator"):
+            if p["n"] != 1.0:
+                raise ValueError(f"element {e.name}: only isothermal volumes translate to ngspice")
+            volume = p["V"] if np.isfinite(p["V"]) else \
+                np.pi / 4 * p["diameter"] ** 2 * p["length"] * 1e-3
+            lines.append(f"C{name} {nd[0]} 0 {gas.capacitance(volume, temperature):.10g}")
+            stored.add(e.nodes[0])
         elif e.kind == "valve":
-            v = p["model"]
             i, o, c = nd
-            hi, lo = f"max(v({i}),v({o}))", f"min(v({i}),v({o}))"
-            u = (f"max({v.ain:.10g}*{hi}+{v.aout:.10g}*{lo}-v({c})-{v.pclose:.10g},0)"
-                 f"/{v.ptrans - v.pclose:.10g}")
-            ue = f"pwr({u},{v.e:.10g})"  # never a parameter named e: SPICE reads it as 2.718
-            lines.append(f"B{e.name} {i} {o} I={ue}/({v.Rf:.10g}*sqrt(1+{ue}*{ue}))"
-                         f"*{_sr(i, o, band)}")
+            flow = f"{_valve_conductance(p['model'], i, o, c)}*{_sr(i, o, band)}"
+            if p["backward"]:
+                back = f"{_valve_conductance(p['backward'], i, o, c)}*{_sr(i, o, band)}"
+                flow = f"(v({i})>=v({o}) ? {flow} : {back})"
+            lines.append(f"B{name} {i} {o} I={flow}")
         else:
             raise ValueError(f"element {e.name}: kind {e.kind!r} has no ngspice translation "
                              "in this benchmark")
+    if dead_capacitance > 0:
+        lines += [f"CDEAD_{spice_name(x)} {spice_name(x)} 0 {dead_capacitance:g}"
+                  for x in dae.node_names if x not in stored]
+    ics = [f"v({spice_name(x)})={v:.10g}" for x, v in zip(dae.node_names, y0)]
     lines += [".ic " + " ".join(ics[i:i + 50]) for i in range(0, len(ics), 50)]
     lines += [f".options reltol={reltol:g} abstol=1e-6 vntol=1e-6 chgtol=1e-12 itl4=50",
               f".tran {t_step:g} {t_stop:g} uic", ".end"]

@@ -1,0 +1,215 @@
+"""Small circuits against ngspice, side by side in one run (issue 15).
+
+    python benchmarks/bench_small.py                   # 3 circuits + demux6, 5 repeats
+    python benchmarks/bench_small.py --repeats 7 --no-demux6
+
+The oscillator (``.tran 10ms 50s``), the flow amplifier (30 s) and the 3-bit
+demultiplexer (16 s) from ``netlists/`` run in pneunet and in ngspice on the same
+equations (bench_scaling.spice_netlist: capacitors, B-sources with the same
+regularised root sr(d) = d/(d²+ε²)^¼, reltol 1e-6, abstol 1e-6 mg/s).  ngspice
+cannot step across a fold of an algebraic node ("timestep too small"), so every
+node without a volume gets a dead capacitance of 1e-4 mg/kPa (≈ 0.008 mL) there.
+
+Printed per circuit (medians of ``--repeats`` runs):
+* in-process transient: pneunet's ``transient`` (netlist parsed outside the timer,
+  imports warmed up) against ngspice's "Total analysis time" (target ≤ 0.5×);
+* whole process: ``python -m pneunet run FILE.pn`` (CSV written) against
+  ``ngspice -b deck.cir`` (data written), target ≤ 4×;
+* accuracy against pneunet at rtol = atol = 1e-9: the oscillator's period, the
+  others' largest relative pressure deviation on the output grid;
+* for the oscillator, steps and residual calls per simulated second.
+``--demux6`` (default on) adds the 6-bit demultiplexer (390 unknowns, 64 s):
+in-process time and the whole process's peak memory (targets 5 s, 300 MB).
+ngspice is skipped with a note when it is not installed
+(``apt-get install -y ngspice`` on Debian/Ubuntu).
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from bench_scaling import mean_period, spice_name, spice_netlist  # noqa: E402
+
+REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+DEAD_CAPACITANCE = 1e-4  # mg/kPa at ngspice's algebraic nodes
+SPICE_RELTOL = 1e-6
+
+CASES = [  # name, netlist, t_step, t_stop (s), compared nodes
+    ("oscillator", "oscillator.pn", 0.01, 50.0, ["tank"]),
+    ("amplifier", "amplifier.pn", 0.01, 30.0, ["muscle"]),
+    ("demux3", "demux3.pn", 0.01, 16.0, [f"act[{k}]" for k in range(8)]),
+]
+
+
+def circuit_of(netlist, **options):
+    from pneunet.netlist import parse_file
+
+    circuit = parse_file(os.path.join(REPO, "netlists", netlist)).circuit
+    circuit.options = circuit.options.replace(**options)
+    return circuit
+
+
+def median_time(run, repeats):
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        run()
+        times.append(time.perf_counter() - t0)
+    return float(np.median(times))
+
+
+# -- pneunet --------------------------------------------------------------------------------
+def pneunet_in_process(netlist, t_step, t_stop, nodes, repeats):
+    from pneunet.simulate import transient
+
+    circuit = circuit_of(netlist)
+    transient(circuit, t_stop, t_step=t_step)  # warm-up (first-call imports)
+    wall = median_time(lambda: transient(circuit, t_stop, t_step=t_step), repeats)
+    sol = transient(circuit, t_stop, t_step=t_step)
+    return dict(wall=wall, t=sol.t, p=np.column_stack([sol.pressure(x) for x in nodes]),
+                stats=sol.stats)
+
+
+def pneunet_reference(netlist, t_step, t_stop, nodes):
+    from pneunet.simulate import transient
+
+    sol = transient(circuit_of(netlist, rtol=1e-9, atol=1e-9), t_stop, t_step=t_step)
+    return sol.t, np.column_stack([sol.pressure(x) for x in nodes])
+
+
+def netlist_with_tran(netlist, t_step, t_stop, folder):
+    """A copy of the netlist whose .tran is ``.tran t_step t_stop``."""
+    with open(os.path.join(REPO, "netlists", netlist)) as fh:
+        text = fh.read()
+    text = re.sub(r"^\.tran .*$", f".tran {t_step:g} {t_stop:g}", text, flags=re.M)
+    path = os.path.join(folder, netlist)
+    with open(path, "w") as fh:
+        fh.write(text)
+    return path
+
+
+def pneunet_process(path, repeats, folder):
+    cmd = [sys.executable, "-m", "pneunet", "run", path, "-q", "-o", folder]
+    return median_time(lambda: subprocess.run(cmd, check=True, cwd=REPO), repeats)
+
+
+def peak_memory_mb(cmd) -> tuple[float, float]:
+    """Wall time (s) and peak resident memory (MB) of one child process."""
+    t0 = time.perf_counter()
+    proc = subprocess.Popen(cmd, cwd=REPO, stdout=subprocess.DEVNULL)
+    _, status, usage = os.wait4(proc.pid, 0)
+    if status:
+        raise RuntimeError(f"{cmd} failed")
+    return time.perf_counter() - t0, usage.ru_maxrss / 1024
+
+
+# -- ngspice --------------------------------------------------------------------------------
+def ngspice_runs(netlist, t_step, t_stop, nodes, repeats, folder):
+    """Median whole-process and analysis times of ``ngspice -b`` and its pressures."""
+    exe = shutil.which("ngspice")
+    deck = os.path.join(folder, "deck.cir")
+    raw = os.path.join(folder, "out.txt")
+    text = spice_netlist(circuit_of(netlist), SPICE_RELTOL, t_step, t_stop=t_stop,
+                         dead_capacitance=DEAD_CAPACITANCE)
+    control = (".control\nset noaskquit\nset filetype=ascii\nrun\nwrdata " + raw + " "
+               + " ".join(f"v({spice_name(x)})" for x in nodes) + "\nrusage all\n.endc\n")
+    with open(deck, "w") as fh:
+        fh.write(text.replace(".end\n", control + ".end\n"))
+    walls, analysis = [], []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        proc = subprocess.run([exe, "-b", deck], capture_output=True, text=True)
+        walls.append(time.perf_counter() - t0)
+        out = proc.stdout + proc.stderr
+        m = re.search(r"Total analysis time \(seconds\) = ([\d.]+)", out)
+        analysis.append(float(m.group(1)) if m else np.nan)
+    data = np.loadtxt(raw, ndmin=2)
+    if abs(data[-1, 0] - t_stop) > 1e-6 * t_stop:
+        raise RuntimeError(f"ngspice stopped at t = {data[-1, 0]:g} s:\n{out[-1500:]}")
+    return dict(wall=float(np.median(walls)), analysis=float(np.median(analysis)),
+                t=data[:, 0], p=data[:, 1::2])
+
+
+# -- accuracy -------------------------------------------------------------------------------
+def deviation(t, p, t_ref, p_ref):
+    """Largest relative deviation of pressures p(t) from the reference on its grid."""
+    on_ref = np.column_stack([np.interp(t_ref, t, p[:, k]) for k in range(p.shape[1])])
+    return float(np.max(np.abs(on_ref - p_ref) / p_ref))
+
+
+def period_error(t, p, t_ref, p_ref):
+    return abs(mean_period(t, p[:, 0]) / mean_period(t_ref, p_ref[:, 0]) - 1)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeats", type=int, default=5)
+    ap.add_argument("--no-demux6", action="store_true")
+    ap.add_argument("--no-ngspice", action="store_true")
+    args = ap.parse_args(argv)
+    have_spice = shutil.which("ngspice") is not None and not args.no_ngspice
+    if not have_spice and not args.no_ngspice:
+        print("note: ngspice not found (apt-get install -y ngspice): ngspice columns skipped")
+    print(f"{os.cpu_count()} cores (shared); medians of {args.repeats}; ngspice reltol "
+          f"{SPICE_RELTOL:g}, dead capacitance {DEAD_CAPACITANCE:g} mg/kPa at algebraic nodes")
+    rows = []
+    for name, netlist, t_step, t_stop, nodes in CASES:
+        with tempfile.TemporaryDirectory() as tmp:
+            pn = pneunet_in_process(netlist, t_step, t_stop, nodes, args.repeats)
+            pn_proc = pneunet_process(netlist_with_tran(netlist, t_step, t_stop, tmp),
+                                      args.repeats, tmp)
+            sp = ngspice_runs(netlist, t_step, t_stop, nodes, args.repeats, tmp) \
+                if have_spice else None
+        t_ref, p_ref = pneunet_reference(netlist, t_step, t_stop, nodes)
+        error = period_error if name == "oscillator" else deviation
+        rows.append((name, pn, pn_proc, sp, error(pn["t"], pn["p"], t_ref, p_ref),
+                     error(sp["t"], sp["p"], t_ref, p_ref) if sp else np.nan))
+        s = pn["stats"]
+        print(f"\n{name} ({t_stop:g} s, {s['unknowns']} unknowns): pneunet {pn['wall']:.3f} s "
+              f"in process, {pn_proc:.2f} s whole; steps {s['steps']}, residuals "
+              f"{s['residual_calls']}, Jacobians {s['jacobian_calls']}, jumps "
+              f"{s['branch_jumps']}" + (f"; ngspice analysis {sp['analysis']:.3f} s, whole "
+                                         f"{sp['wall']:.2f} s" if sp else ""))
+        if name == "oscillator":
+            print(f"  per simulated second: {s['steps'] / t_stop:.1f} steps, "
+                  f"{s['residual_calls'] / t_stop:.1f} residual calls, "
+                  f"{s['jacobian_calls'] / t_stop:.1f} Jacobians")
+        sys.stdout.flush()
+
+    print("\n| circuit | pneunet transient s | ngspice analysis s | ratio (≤ 0.5) | pneunet "
+          "process s | ngspice process s | ratio (≤ 4) | error pneunet | error ngspice |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for name, pn, pn_proc, sp, err_pn, err_sp in rows:
+        what = "period" if name == "oscillator" else "max rel. p"
+        if sp:
+            print(f"| {name} | {pn['wall']:.3f} | {sp['analysis']:.3f} | "
+                  f"{pn['wall'] / sp['analysis']:.2f} | {pn_proc:.2f} | {sp['wall']:.2f} | "
+                  f"{pn_proc / sp['wall']:.2f} | {what} {err_pn:.1e} | {err_sp:.1e} |")
+        else:
+            print(f"| {name} | {pn['wall']:.3f} | – | – | {pn_proc:.2f} | – | – | "
+                  f"{what} {err_pn:.1e} | – |")
+
+    if not args.no_demux6:
+        demux6 = os.path.join(REPO, "netlists", "demux6.pn")
+        with tempfile.TemporaryDirectory() as tmp:
+            wall, peak = peak_memory_mb([sys.executable, "-m", "pneunet", "run", demux6, "-q",
+                                         "-o", tmp])
+        pn = pneunet_in_process("demux6.pn", 0.01, 64.0, ["act[0]"], 1)
+        s = pn["stats"]
+        print(f"\ndemux6 (64 s, {s['unknowns']} unknowns): transient {pn['wall']:.2f} s "
+              f"(target ≤ 5 s); whole process {wall:.2f} s, peak memory {peak:.0f} MB "
+              f"(target ≤ 300 MB); steps {s['steps']}, residuals {s['residual_calls']}, "
+              f"Jacobians {s['jacobian_calls']}")
+
+
+if __name__ == "__main__":
+    main()
