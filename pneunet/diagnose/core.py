@@ -82,8 +82,7 @@ class Diagnosis:
     stages: list
     rounds: list  # list of lists of Candidate
     noise: dict
-    adequate: bool
-    unexplained: bool
+    structure_left: bool  # the learned residual model still finds structure
     notes: list
     settings: dict
     identification: object = None
@@ -97,8 +96,20 @@ class Diagnosis:
         return self.stages[-1]
 
     @property
-    def accepted(self) -> list[str]:
+    def added(self) -> list[str]:
+        """Effects that passed the acceptance rule, in waterfall order."""
         return [s.label for s in self.stages[1:]]
+
+    @property
+    def accepted(self) -> list[str]:
+        """The effects claimed as the explanation: :attr:`added` unless the verdict is
+        ``unexplained`` (then they only partly help, :attr:`partial`)."""
+        return [] if self.verdict == "unexplained" else self.added
+
+    @property
+    def partial(self) -> list[str]:
+        """Added effects that lower the error but leave structure: claimed as nothing."""
+        return self.added if self.verdict == "unexplained" else []
 
     @property
     def model(self) -> ValveModel:
@@ -109,8 +120,28 @@ class Diagnosis:
         return self.rounds[0] if self.rounds else []
 
     @property
+    def verdict(self) -> str:
+        """``adequate``, ``explained`` or ``unexplained`` (:func:`pneunet.truth.verdict`:
+        held-out errors against the noise floor, and structure a flexible residual
+        model still learns)."""
+        from ..truth import verdict
+
+        return verdict(self.baseline.cv_rmse, self.final.cv_rmse, self.noise["rmse"],
+                       self.added, structure_left=self.structure_left)
+
+    @property
+    def waterfall(self):
+        """The error waterfall (:class:`pneunet.truth.Waterfall`, CV RMSE in mg/s)."""
+        from ..truth import Step, Waterfall
+
+        steps = [Step(s.label, s.cv_rmse, s.cv_se,
+                      effects=tuple(x.label for x in self.stages[1:i + 1]))
+                 for i, s in enumerate(self.stages)]
+        return Waterfall(steps, self.noise["rmse"], "mg/s", base_label="six-parameter model")
+
+    @property
     def where(self) -> list:
-        stage = self.final if self.accepted else self.baseline
+        stage = self.final if self.added else self.baseline
         return [{"feature": f, "importance": round(v, 4), "label": FEATURE_LABELS.get(f, f)}
                 for f, v in stage.structure["importance"]]
 
@@ -119,18 +150,22 @@ class Diagnosis:
 
     def to_json(self) -> dict:
         b, f = self.baseline, self.final
+        verdict = self.verdict
         return {
-            "adequate": bool(self.adequate),
-            "unexplained": bool(self.unexplained),
-            "final_adequate": bool(not self.unexplained),
+            "verdict": verdict,
+            "adequate": verdict == "adequate",
+            "unexplained": verdict == "unexplained",
+            "final_adequate": verdict != "unexplained",
             "accepted": self.accepted,
+            "partial": self.partial,
+            "rms_unit": "mg/s",
             "ranking": [c.to_json() for c in self.ranking],
             "rounds": [[c.to_json() for c in r] for r in self.rounds],
             "baseline": {**b.summary(), "params": b.fit.model.params.as_dict()},
             "final": {**f.summary(), "params": f.fit.model.card_params(),
                       "effects": f.fit.effect_params()},
-            "waterfall": [{"label": s.label, "cv_rmse": s.cv_rmse, "cv_rmse_se": s.cv_se}
-                          for s in self.stages],
+            "waterfall": [dict(w, cv_rmse=s.cv_rmse, cv_rmse_se=s.cv_se)
+                          for w, s in zip(self.waterfall.to_json(), self.stages)],
             "where": self.where,
             "structure": {
                 "baseline": _structure_json(b.structure),
@@ -318,11 +353,9 @@ def _diagnose(data, *, effects, n_splits, z, min_gain, max_effects, mdot_min, sc
                      "shift of p_close (measure rising and falling p_ctrl sweeps)")
     # re-estimate the noise floor under the final model (less misfit to cancel)
     noise = noise_floor(df, stages[-1].resid, stages[-1].pred)
-    unexplained = bool(stages[-1].structure["learnable"])
-    adequate = len(stages) == 1 and not unexplained
     ident = None
-    return Diagnosis(data=df, stages=stages, rounds=rounds, noise=noise, adequate=adequate,
-                     unexplained=unexplained, notes=notes, settings=settings,
+    return Diagnosis(data=df, stages=stages, rounds=rounds, noise=noise,
+                     structure_left=bool(stages[-1].structure["learnable"]), notes=notes, settings=settings,
                      identification=ident)
 
 
@@ -456,19 +489,17 @@ def format_report(diag: Diagnosis) -> str:
     L.append(f"    data points       = {j['n']} in {j['n_sweeps']} sweeps "
              f"({diag.settings['n_splits']}-fold CV grouped by sweep)")
     L.append(f"    noise floor       = {j['noise_floor']:.3g} mg/s (estimated from the data)")
-    verdict = ("ADEQUATE: nothing missing that the data can show" if diag.adequate else
-               ("UNEXPLAINED structure remains" if diag.unexplained else
-                "extended model adequate"))
+    verdict = {"adequate": "ADEQUATE: nothing missing that the data can show",
+               "explained": "EXPLAINED: the accepted effects bring the held-out error to the "
+                            "noise floor",
+               "unexplained": "UNEXPLAINED structure remains"}[diag.verdict]
     L.append(f"    verdict           = {verdict}")
     L.append(f"    accepted effects  = {', '.join(diag.accepted) or '(none)'}")
+    if diag.partial:
+        L.append(f"    partly helping    = {', '.join(diag.partial)} (not claimed: structure "
+                 "remains)")
     L.append("[[Error waterfall]] (RMSE of held-out sweeps, mg/s)")
-    prev = None
-    for s in diag.stages:
-        step = "" if prev is None else f"   ({s.cv_rmse - prev:+.3g})"
-        lab = "six-parameter model" if s.label == "baseline" else f"+ {s.label}"
-        L.append(f"    {lab:<24} {s.cv_rmse:9.3f} ± {s.cv_se:.2g}{step}")
-        prev = s.cv_rmse
-    L.append(f"    {'noise floor':<24} {j['noise_floor']:9.3f}")
+    L.append(diag.waterfall.table())
     L.append(f"    in-sample: baseline rmse {b.fit.rmse:.3g} (open {b.fit.rmse_open:.3g}), "
              f"final rmse {f.fit.rmse:.3g} (open {f.fit.rmse_open:.3g})")
     for k, rnd in enumerate(diag.rounds):
@@ -490,7 +521,7 @@ def format_report(diag: Diagnosis) -> str:
                               if get_effect(n).tell_apart)
             L.append(f"    {' and '.join(names)} explain these data equally well; "
                      f"to tell them apart measure — {hints}")
-    for lab, s in (("before", b), ("after", f)) if diag.accepted else (("", b),):
+    for lab, s in (("before", b), ("after", f)) if diag.added else (("", b),):
         st = s.structure
         L.append(f"[[Remaining structure {lab}]]".replace(" ]]", "]]"))
         L.append(f"    learned residual model: CV explained variance {st['r2_cv']:.2f}, removes "
@@ -503,7 +534,7 @@ def format_report(diag: Diagnosis) -> str:
                  f"open predicted closed, {m['closed_but_predicted_open']} closed predicted open)")
         for r in s.regions or []:
             L.append(f"    - {r['text']}")
-    if diag.accepted:
+    if diag.added:
         L.append("[[Fitted effects]]")
         for eid, pars in f.fit.effect_params().items():
             for n, v in pars.items():

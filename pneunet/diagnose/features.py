@@ -117,14 +117,11 @@ def noise_floor(df: pd.DataFrame, resid: np.ndarray, pred: np.ndarray, n_bins=8)
     misfit is sharp (the opening flank).  Returns ``{"rmse": σ_floor, "bins":
     [(flow_lo, flow_hi, σ, n)]}`` with σ_floor the RMS over all points.
     """
-    g = df["group"].to_numpy()
-    r = np.asarray(resid, float)
-    ok = np.zeros(len(r), dtype=bool)
-    ok[1:-1] = (g[:-2] == g[1:-1]) & (g[2:] == g[1:-1])
-    idx = np.flatnonzero(ok)
+    from ..truth.noise import robust_sigma, second_differences
+
+    d2, idx = second_differences(resid, df["group"].to_numpy(), centres=True)
     if len(idx) < 30:
         return {"rmse": float("nan"), "bins": []}
-    d2 = r[idx - 1] - 2 * r[idx] + r[idx + 1]
     m = np.abs(pred[idx])
     mp = np.abs(pred)
     closed_cut = 1.0
@@ -140,7 +137,7 @@ def noise_floor(df: pd.DataFrame, resid: np.ndarray, pred: np.ndarray, n_bins=8)
         sel = which == b
         if sel.sum() < 10:
             continue
-        s = 1.4826 * np.median(np.abs(d2[sel])) / np.sqrt(6.0)
+        s = robust_sigma(d2[sel])
         sig_bin[b] = s
         bins.append((float(edges[b]), float(edges[b + 1]), float(s), int(sel.sum())))
     if not sig_bin:

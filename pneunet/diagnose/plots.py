@@ -6,6 +6,7 @@ from pathlib import Path
 import numpy as np
 
 from ..plotting import pyplot, save
+from ..truth.verdict import TOLERANCE
 from .features import FEATURE_LABELS
 from .residuals import binned_map
 
@@ -18,25 +19,8 @@ def plot_waterfall(diag, path):
     """Error waterfall (CV RMSE: baseline → each accepted effect) and candidate ranking."""
     plt = pyplot()
     fig, (ax, ax2) = plt.subplots(1, 2, figsize=(11, 4), gridspec_kw={"width_ratios": [1, 1.3]})
-    st = diag.stages
-    labels = ["six-parameter"] + [f"+ {s.label}" for s in st[1:]]
-    vals = [s.cv_rmse for s in st]
-    ses = [s.cv_se for s in st]
-    x = np.arange(len(st))
-    bottoms = [0.0] + vals[1:]
-    heights = [vals[0]] + [vals[i - 1] - vals[i] for i in range(1, len(vals))]
-    colors = ["#4c72b0"] + ["#55a868"] * (len(st) - 1)
-    ax.bar(x, heights, bottom=bottoms, color=colors, width=0.6)
-    ax.errorbar(x, vals, yerr=1.96 * np.array(ses), fmt="none", ecolor="k", capsize=4)
-    ax.bar(len(st), vals[-1], color="#8172b2", width=0.6)
-    nf = diag.noise["rmse"]
-    ax.axhline(nf, color="#c44e52", ls="--", label=f"noise floor {nf:.2f} mg/s (from data)")
-    ax.set_xticks(list(x) + [len(st)], labels + ["final"], rotation=20)
-    ax.set_ylabel("CV RMSE of held-out sweeps [mg/s]")
-    ax.set_title("error waterfall")
-    ax.legend(loc="upper right", fontsize=8)
-    for xi, v in zip(list(x) + [len(st)], vals + [vals[-1]]):
-        ax.text(xi, v, f"{v:.2f}", ha="center", va="bottom", fontsize=8)
+    diag.waterfall.draw(ax, tolerance=TOLERANCE)
+    ax.set_title(f"error waterfall: {diag.verdict}")
     rnd = diag.ranking
     names = [c.effect for c in rnd]
     gains = [c.gain if c.gain is not None else c.insample_gain for c in rnd]
@@ -62,7 +46,7 @@ def plot_residual_maps(diag, path, pairs=MAP_PAIRS):
     shares one colour scale, so what is left after the effects shows as pale.
     """
     plt = pyplot()
-    stages = [diag.baseline] + ([diag.final] if diag.accepted else [])
+    stages = [diag.baseline] + ([diag.final] if diag.added else [])
     fig, axes = plt.subplots(len(stages), len(pairs), figsize=(4.2 * len(pairs),
                                                                3.6 * len(stages)), squeeze=False)
     for col, (fx, fy) in enumerate(pairs):
@@ -96,7 +80,7 @@ def plot_residual_maps(diag, path, pairs=MAP_PAIRS):
 def plot_where(diag, path):
     """Feature importance of the learned residual model (before / after)."""
     plt = pyplot()
-    stages = [diag.baseline] + ([diag.final] if diag.accepted else [])
+    stages = [diag.baseline] + ([diag.final] if diag.added else [])
     fig, axes = plt.subplots(1, len(stages), figsize=(5 * len(stages), 3.4), squeeze=False)
     for ax, stage in zip(axes[0], stages):
         s = stage.structure

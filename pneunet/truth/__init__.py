@@ -9,7 +9,7 @@ error waterfall (:mod:`.verdict`, :mod:`.waterfall`).
 from __future__ import annotations
 
 from .noise import difference_sigma
-from .verdict import VERDICTS, Step, decide
+from .verdict import TOLERANCE, VERDICTS, Step, decide, verdict
 from .waterfall import Waterfall
 
-__all__ = ["VERDICTS", "Step", "Waterfall", "decide", "difference_sigma"]
+__all__ = ["TOLERANCE", "VERDICTS", "Step", "Waterfall", "decide", "difference_sigma", "verdict"]

@@ -14,18 +14,26 @@ import numpy as np
 MAD_TO_SIGMA = 1.4826
 
 
-def second_differences(r, groups=None) -> np.ndarray:
+def second_differences(r, groups=None, centres: bool = False):
     """r[i−1] − 2r[i] + r[i+1] for every i whose neighbours lie in the same group
-    (a sweep, a contiguous stretch of samples); ``groups`` None: one group."""
+    (a sweep, a contiguous stretch of samples); ``groups`` None: one group.  With
+    ``centres`` also the indices i (to bin the differences by where they sit)."""
     r = np.asarray(r, float)
     if len(r) < 3:
-        return np.empty(0)
+        return (np.empty(0), np.empty(0, int)) if centres else np.empty(0)
     ok = np.ones(len(r) - 2, dtype=bool)
     if groups is not None:
         g = np.asarray(groups)
         ok = (g[:-2] == g[1:-1]) & (g[2:] == g[1:-1])
     d2 = r[:-2] - 2 * r[1:-1] + r[2:]
-    return d2[ok & np.isfinite(d2)]
+    keep = ok & np.isfinite(d2)
+    return (d2[keep], np.flatnonzero(keep) + 1) if centres else d2[keep]
+
+
+def robust_sigma(d2) -> float:
+    """Noise standard deviation from second differences ``d2`` (zero-centred):
+    1.4826 · median |d2| / √6."""
+    return float(MAD_TO_SIGMA * np.median(np.abs(d2)) / np.sqrt(6.0))
 
 
 def difference_sigma(r, groups=None, min_points: int = 10) -> float:
@@ -34,7 +42,7 @@ def difference_sigma(r, groups=None, min_points: int = 10) -> float:
     d2 = second_differences(r, groups)
     if len(d2) < min_points:
         return float("nan")
-    return float(MAD_TO_SIGMA * np.median(np.abs(d2 - np.median(d2))) / np.sqrt(6.0))
+    return robust_sigma(d2 - np.median(d2))
 
 
 def segments(mask) -> np.ndarray:

@@ -37,17 +37,33 @@ def at_floor(error: float, floor: float, tolerance: float = TOLERANCE) -> bool:
     return bool(math.isfinite(error) and math.isfinite(floor) and error <= tolerance * floor)
 
 
+def verdict(base_error: float, final_error: float, floor: float, accepted,
+            structure_left: bool = False, tolerance: float = TOLERANCE) -> str:
+    """The verdict word of a diagnosis.
+
+    ``base_error``/``final_error``: held-out error of the base model and of the model
+    with the ``accepted`` effects; ``structure_left``: a flexible residual model (or a
+    locator) still finds structure the accepted effects leave.  An accepted effect
+    counts only when it brings the error to the floor and leaves no structure."""
+    if structure_left:
+        return "unexplained"
+    if accepted:
+        return "explained" if at_floor(final_error, floor, tolerance) else "unexplained"
+    return "adequate" if at_floor(base_error, floor, tolerance) else "unexplained"
+
+
 def decide(steps: list[Step], floor: float, tolerance: float = TOLERANCE) -> tuple[str, list]:
     """(verdict, accepted effect names) from the waterfall ``steps`` (base first, then
-    the model with 1, 2 … effects, each step's ``effects`` the whole set so far)."""
+    the model with 1, 2 … effects, each step's ``effects`` the whole set so far): the
+    first step at the floor is accepted."""
     if not steps:
         raise ValueError("no waterfall steps")
-    if at_floor(steps[0].held_out, floor, tolerance):
-        return "adequate", []
-    for s in steps[1:]:
-        if at_floor(s.held_out, floor, tolerance):
-            return "explained", list(s.effects)
-    return "unexplained", []
+    accepted = []
+    if not at_floor(steps[0].held_out, floor, tolerance):
+        accepted = next((list(s.effects) for s in steps[1:]
+                         if at_floor(s.held_out, floor, tolerance)), [])
+    final = next((s.held_out for s in steps if list(s.effects) == accepted), steps[0].held_out)
+    return verdict(steps[0].held_out, final, floor, accepted, tolerance=tolerance), accepted
 
 
 def _num(v):
