@@ -29,6 +29,8 @@ class _FamilyBlock:
     jac_flat: np.ndarray       # flat (n·P·P) index of each port pair that is both free
     free_flat: np.ndarray      # flat (n·P) index of each port at an unknown node
     free_nodes: np.ndarray     # the unknown's index at each of those ports
+    flows: slice = None        # this family's port flows in the evaluation buffer
+    partials: slice = None     # its port-pair partials in the partials buffer
 
 
 class CircuitDAE:
@@ -99,10 +101,32 @@ class CircuitDAE:
             block.jac_pos = pos[start:start + count]
             start += count
         self._blocks = blocks
-        self._residual_nodes = np.concatenate([b.free_nodes for b in blocks])
-        self._jacobian_positions = np.concatenate([b.jac_pos for b in blocks])
         self._pinned = [(b.family, b.port_node[:, list(b.family.pinned_ports)])
                         for b in blocks if b.family.pinned_ports]
+        # every port flow and port-pair partial of every family goes to one buffer; one
+        # bincount sums them per node / per CSC entry (index n / nnz: a fixed node, dropped)
+        flow_to, partial_to = [], []
+        for block in blocks:
+            node = np.where(block.port_node < self.n, block.port_node, self.n).ravel()
+            flow_to.append(node)
+            pair = np.full(block.port_node.size * block.port_node.shape[1], self.nnz)
+            pair[block.jac_flat] = block.jac_pos
+            partial_to.append(pair)
+            block.flows = slice(sum(map(len, flow_to[:-1])), sum(map(len, flow_to)))
+            block.partials = slice(sum(map(len, partial_to[:-1])), sum(map(len, partial_to)))
+        self._flow_to = np.concatenate(flow_to) if flow_to else np.empty(0, int)
+        self._partial_to = np.concatenate(partial_to) if partial_to else np.empty(0, int)
+        self._flow_buffer = np.zeros(self._flow_to.size)
+        self._partial_buffer = np.zeros(self._partial_to.size)
+        # families with no port at an unknown node (pressure sources) add nothing
+        self._active = [b for b in blocks if b.free_flat.size]
+        # pressures and rates of all nodes at one time, refilled in place
+        self._p = np.empty(self.n + len(self.fixed_names))
+        self._p[self._reference_idx] = self.options.ambient
+        self._pdot = np.zeros_like(self._p)
+        self._pinned_at = None  # time of the pinned pressures now in self._p
+        cols = np.repeat(np.arange(self.n), np.diff(self._csc_indptr))
+        self._dense_at = (self._csc_indices.astype(np.intp), cols)
 
     def sparsity(self):
         """The Jacobian's sparsity pattern as a scipy CSC matrix of ones."""
@@ -136,6 +160,17 @@ class CircuitDAE:
             full[..., nodes] = family.pinned_pressure(t)
         return full
 
+    def _pressures_at(self, t, y, ydot):
+        """The shared pressure and rate buffers of all nodes at one time (kPa, kPa/s)."""
+        p = self._p
+        p[:self.n] = y
+        if t != self._pinned_at:
+            for family, nodes in self._pinned:
+                p[nodes] = family.pinned_pressure(t)
+            self._pinned_at = t
+        self._pdot[:self.n] = ydot
+        return p, self._pdot
+
     def evaluate(self, t, y, ydot, cj=None, absolute=False):
         """Residual F(t, y, ẏ); with ``cj`` also the CSC data of ∂F/∂y + cj·∂F/∂ẏ.
 
@@ -143,28 +178,35 @@ class CircuitDAE:
         of each entry before cancellation, used by the fold indicator).
         Contributions of all families are summed by one bincount each.
         """
-        p = self.full_pressures(t, y)
-        pdot = np.zeros_like(p)
-        pdot[:self.n] = ydot
-        flows, entries = [], []
-        for block in self._blocks:
+        p, pdot = self._pressures_at(t, y, ydot)
+        flows, partials = self._flow_buffer, self._partial_buffer
+        for block in self._active:
+            nodes = block.port_node
             if cj is None:
-                q = block.family.flows(t, p[block.port_node], pdot[block.port_node])
+                q = block.family.flows(t, p[nodes], pdot[nodes])
             else:
-                q, dq_dp, dq_dpdot = block.family.outflows(t, p[block.port_node],
-                                                           pdot[block.port_node])
-                values = dq_dp if dq_dpdot is None else dq_dp + cj * dq_dpdot
-                entries.append(values.ravel()[block.jac_flat])
-            flows.append(q.ravel()[block.free_flat])
-        res = np.bincount(self._residual_nodes, weights=np.concatenate(flows), minlength=self.n)
+                q, dq_dp, dq_dpdot = block.family.outflows(t, p[nodes], pdot[nodes])
+                partials[block.partials] = (dq_dp if dq_dpdot is None
+                                            else dq_dp + cj * dq_dpdot).ravel()
+            flows[block.flows] = q.ravel()
+        res = np.bincount(self._flow_to, weights=flows, minlength=self.n + 1)[:self.n]
         if cj is None:
             return (res, None, None) if absolute else (res, None)
-        entries = np.concatenate(entries)
-        data = np.bincount(self._jacobian_positions, weights=entries, minlength=self.nnz)
+        data = np.bincount(self._partial_to, weights=partials, minlength=self.nnz + 1)[:self.nnz]
         if not absolute:
             return res, data
-        scale = np.bincount(self._jacobian_positions, weights=np.abs(entries), minlength=self.nnz)
+        scale = np.bincount(self._partial_to, weights=np.abs(partials),
+                            minlength=self.nnz + 1)[:self.nnz]
         return res, data, scale
+
+    def dense(self, data, out=None) -> np.ndarray:
+        """The Jacobian with CSC ``data`` as a dense (n, n) array (written into ``out``)."""
+        if out is None:
+            out = np.zeros((self.n, self.n))
+        else:
+            out[:, :] = 0.0
+        out[self._dense_at] = data
+        return out
 
     def jacobian(self, t, y, ydot, cj=0.0):
         """∂F/∂y + cj·∂F/∂ẏ as a scipy CSC matrix."""

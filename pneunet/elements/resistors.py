@@ -20,6 +20,9 @@ def pipe_resistance(length_mm, diameter_mm, friction, temperature_k, molar_mass_
     return r_si * 1e-9  # Pa·s/kg -> kPa·s/mg
 
 
+_OUT_IN = np.array([1.0, -1.0])  # a flow a→b leaves node a and enters node b
+
+
 class _QuadratureFamily(ElementFamily):
     """Shared flow law of resistors; subclasses set ``self._r`` (kPa·s/mg) per instance."""
 
@@ -28,15 +31,14 @@ class _QuadratureFamily(ElementFamily):
     def outflows(self, t, p, pdot):
         mdot, d_a, d_b = quadrature_flow(p[:, 0], p[:, 1], self._r,
                                          self.context.options.flow_band)
-        dq = np.empty((self.n, 2, 2))
-        dq[:, 0, 0], dq[:, 0, 1] = d_a, d_b
-        dq[:, 1, 0], dq[:, 1, 1] = -d_a, -d_b
-        return np.stack([mdot, -mdot], axis=1), dq, None
+        grad = np.empty((self.n, 1, 2))
+        grad[:, 0, 0], grad[:, 0, 1] = d_a, d_b
+        return mdot[:, None] * _OUT_IN, _OUT_IN[:, None] * grad, None
 
     def flows(self, t, p, pdot):
         mdot, _, _ = quadrature_flow(p[..., 0], p[..., 1], self._r,
                                      self.context.options.flow_band, partials=False)
-        return np.stack([mdot, -mdot], axis=-1)
+        return mdot[..., None] * _OUT_IN
 
     def signals(self, t, p):
         return {"mdot": ("mg/s", self.flows(t, p, None)[..., 0])}

@@ -21,6 +21,7 @@ from . import register
 from .base import ElementFamily, Param
 
 _FD_STEP_KPA = 1e-4
+_PORTS = np.array([1.0, -1.0, 0.0])  # flow in→out leaves node in, enters out; none at ctrl
 
 
 @register
@@ -81,14 +82,11 @@ class MembraneValve(ElementFamily):
 
     def outflows(self, t, p, pdot):
         mdot, (d_in, d_out, d_ctrl) = self._analytic_flow(p)
-        grads = np.stack([d_in, d_out, d_ctrl], axis=1)
+        grads = np.empty((self.n, 1, 3))
+        grads[:, 0, 0], grads[:, 0, 1], grads[:, 0, 2] = d_in, d_out, d_ctrl
         for model, idx in self._custom.values():
-            mdot[idx], grads[idx] = _numeric_flow(model, p[idx])
-        q = np.zeros((self.n, 3))
-        q[:, 0], q[:, 1] = mdot, -mdot
-        dq = np.zeros((self.n, 3, 3))
-        dq[:, 0, :], dq[:, 1, :] = grads, -grads
-        return q, dq, None
+            mdot[idx], grads[idx, 0] = _numeric_flow(model, p[idx])
+        return mdot[:, None] * _PORTS, _PORTS[:, None] * grads, None
 
     def _flow(self, p):
         """Flow in→out (mg/s) for pressures p (..., n, 3), without partials."""
@@ -98,10 +96,7 @@ class MembraneValve(ElementFamily):
         return mdot
 
     def flows(self, t, p, pdot):
-        mdot = self._flow(p)
-        q = np.zeros(p.shape)
-        q[..., 0], q[..., 1] = mdot, -mdot
-        return q
+        return self._flow(p)[..., None] * _PORTS
 
     def signals(self, t, p):
         mdot = self._flow(p)

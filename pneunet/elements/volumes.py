@@ -57,10 +57,9 @@ class Volume(ElementFamily):
         return c, c * expo / (ratio * self._p_ref)
 
     def outflows(self, t, p, pdot):
-        c, dc = self.capacitance(p[:, 0])
-        q = (c * pdot[:, 0])[:, None]
-        dq_dp = np.broadcast_to(dc * pdot[:, 0], (self.n,))[:, None, None]
-        return q, dq_dp, np.broadcast_to(c, (self.n,))[:, None, None]
+        c, dc = self.capacitance(p[:, 0])  # c (n,), dc (n,) or 0
+        rate = pdot[:, 0]
+        return (c * rate)[:, None], (dc * rate).reshape(self.n, 1, 1), c.reshape(self.n, 1, 1)
 
     def flows(self, t, p, pdot):
         return self.capacitance(p[..., 0])[0][..., None] * pdot

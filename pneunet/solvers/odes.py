@@ -65,7 +65,7 @@ class OdesIntegrator(Integrator):
 
     def _jac_dense(self, t, y, yp, res, cj, jac):
         self.n_jac += 1
-        jac[:, :] = self.dae.csc(self.dae.evaluate(t, y, yp, cj)[1]).toarray()
+        self.dae.dense(self.dae.evaluate(t, y, yp, cj)[1], out=jac)
         return 0
 
     def _root(self, t, y, yp, g):

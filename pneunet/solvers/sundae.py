@@ -62,7 +62,7 @@ class SundaeIntegrator(Integrator):
 
     def _jac_dense(self, t, y, yp, res, cj, jj):
         self.n_jac += 1
-        jj[:, :] = self.dae.csc(self.dae.evaluate(t, y, yp, cj)[1]).toarray()
+        self.dae.dense(self.dae.evaluate(t, y, yp, cj)[1], out=jj)
 
     def _lu_setup(self, t, y, yp, res, cj):
         from scipy.sparse.linalg import splu
