@@ -23,6 +23,24 @@ def column_name(signal: str, unit: str) -> str:
     return f"{signal}_{unit.replace('/', '_').replace('*', '').replace('·', '')}"
 
 
+def write_csv(path, table: Mapping[str, Any]) -> None:
+    """Columns of equal length as CSV: numbers with 9 significant digits, text as it is."""
+    from pathlib import Path
+
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    columns = list(table.values())
+    with open(path, "w") as fh:
+        fh.write(",".join(table) + "\n")
+        if all(np.asarray(c).dtype.kind in "fiu" for c in columns):
+            if columns and len(columns[0]):
+                np.savetxt(fh, np.column_stack(columns), fmt="%.9g", delimiter=",")
+            return
+        for row in zip(*columns):
+            fh.write(",".join(f"{v:.9g}" if isinstance(v, (float, int, np.number)) else str(v)
+                              for v in row) + "\n")
+
+
 def _freeze(mapping):
     """Read-only float copies of the signals; arrays already read-only are kept as they are
     (the analyses hand over read-only views of arrays nothing else holds)."""
@@ -123,21 +141,21 @@ class Solution:
         """All signals at the last time point."""
         return {k: float(v[-1]) for k, v in self.signals.items()}
 
-    def to_pandas(self):
-        """A DataFrame: ``time_s`` and one column per signal named with its unit."""
-        import pandas as pd
-
+    def table(self) -> dict[str, np.ndarray]:
+        """Columns: ``time_s`` and one per signal named with its unit."""
         data = {"time_s": self.t}
         data.update({column_name(k, self.units[k]): v for k, v in self.signals.items()})
-        return pd.DataFrame(data)
+        return data
+
+    def to_pandas(self):
+        """:meth:`table` as a DataFrame."""
+        import pandas as pd
+
+        return pd.DataFrame(self.table())
 
     def to_csv(self, path) -> None:
-        """Write :meth:`to_pandas` as CSV (one row per time point)."""
-        from pathlib import Path
-
-        path = Path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        self.to_pandas().to_csv(path, index=False, float_format="%.9g")
+        """Write :meth:`table` as CSV (one row per time point)."""
+        write_csv(path, self.table())
 
     def plot(self, path=None, signals=None):
         """Plot pressures (top) and flows (bottom); save a PNG when ``path`` is given."""
@@ -176,12 +194,17 @@ class OperatingPoint:
         object.__setattr__(self, "pressures", MappingProxyType(dict(self.pressures)))
         object.__setattr__(self, "flows", MappingProxyType(dict(self.flows)))
 
+    def table(self) -> dict[str, list]:
+        """Columns ``signal``, ``value`` (kPa or mg/s) and ``unit``."""
+        rows = [("p_" + k, v, "kPa") for k, v in self.pressures.items()]
+        rows += [("mdot_" + k, v, "mg/s") for k, v in self.flows.items()]
+        return {"signal": [r[0] for r in rows], "value": [r[1] for r in rows],
+                "unit": [r[2] for r in rows]}
+
     def to_pandas(self):
         import pandas as pd
 
-        rows = [("p_" + k, v, "kPa") for k, v in self.pressures.items()]
-        rows += [("mdot_" + k, v, "mg/s") for k, v in self.flows.items()]
-        return pd.DataFrame(rows, columns=["signal", "value", "unit"])
+        return pd.DataFrame(self.table())
 
     def __str__(self) -> str:
         lines = [f"  p({k}) = {v:.4f} kPa" for k, v in self.pressures.items()]

@@ -18,15 +18,13 @@ def check_topology(circuit) -> None:
       a volume (their pressures are undetermined);
     * ``.ic`` on a node that does not exist.
     """
-    import networkx as nx
-
     from . import elements
 
     if not circuit.elements:
         raise TopologyError("the circuit has no elements")
     pinned: dict[str, str] = {n: "reference" for n in circuit.nodes if circuit.is_reference(n)}
     storage: set[str] = set()
-    flow_graph = nx.Graph()
+    flow_edges: list[tuple[str, str]] = []
     touched_by_flow: set[str] = set()
     for spec in circuit.elements.values():
         family = elements.family(spec.kind)
@@ -43,9 +41,7 @@ def check_topology(circuit) -> None:
         ports = family.flow_ports if family.flow_ports is not None else range(len(spec.nodes))
         flow_nodes = [spec.nodes[p] for p in ports]
         touched_by_flow.update(flow_nodes)
-        flow_graph.add_nodes_from(flow_nodes)
-        for a, b in zip(flow_nodes, flow_nodes[1:]):
-            flow_graph.add_edge(a, b)
+        flow_edges += zip(flow_nodes, flow_nodes[1:])
     if not pinned:
         raise TopologyError("no node has a defined pressure",
                             hint="add a pressure source, or connect a vent to 'atm' (or '0')")
@@ -55,7 +51,7 @@ def check_topology(circuit) -> None:
         raise TopologyError(
             f"node {floating[0]!r} is floating: it only connects to control ports ({', '.join(users)})",
             where=f"node {floating[0]}", hint="connect it to a source, a volume or a resistor")
-    for group in nx.connected_components(flow_graph):
+    for group in _components([n for n in circuit.nodes if n in touched_by_flow], flow_edges):
         if not (group & set(pinned)) and not (group & storage):
             names = ", ".join(sorted(group))
             raise TopologyError(f"nodes {names} have no path to a defined pressure and no volume",
@@ -69,3 +65,20 @@ def check_topology(circuit) -> None:
         raise TopologyError(f"initial condition for unknown node {unknown[0]!r}",
                             where=f"node {unknown[0]}",
                             hint=f"did you mean {close[0]!r}?" if close else None)
+
+
+def _components(nodes, edges) -> list[set[str]]:
+    """Connected components of an undirected graph (union-find), in order of first node."""
+    parent = {n: n for n in nodes}
+
+    def root(n):
+        while parent[n] != n:
+            parent[n] = parent[parent[n]]
+            n = parent[n]
+        return n
+    for a, b in edges:
+        parent[root(a)] = root(b)
+    groups: dict[str, set[str]] = {}
+    for n in nodes:
+        groups.setdefault(root(n), set()).add(n)
+    return list(groups.values())

@@ -33,6 +33,7 @@ def main(args) -> int:
     from ..errors import SolverError
     from ..netlist import parse_file
     from ..netlist.runner import RunResult, evaluate_measures, measure_unit, run_analysis
+    from ..solution import write_csv
 
     path = Path(args.netlist)
     deck = parse_file(path)
@@ -69,14 +70,13 @@ def main(args) -> int:
             counts[analysis.kind] = counts.get(analysis.kind, 0) + 1
             suffix = "" if counts[analysis.kind] == 1 else str(counts[analysis.kind])
             name = f"{analysis.kind}{suffix}{tag}"
-            table = result.to_pandas()
+            table = result.table()
             if saves and analysis.kind in ("tran", "dc"):
-                keep = [c for c in table.columns if not any(
-                    c.startswith(s + "_") or c == s for s in saves)]
-                first = table.columns[0]
-                table = table[[first] + [c for c in table.columns[1:] if c not in keep]]
+                first, *rest = table
+                table = {c: table[c] for c in [first] + [c for c in rest if any(
+                    c.startswith(s + "_") or c == s for s in saves)]}
             csv = out_dir / f"{name}.csv"
-            table.to_csv(csv, index=False, float_format="%.9g")
+            write_csv(csv, table)
             files.append(str(csv))
             if args.plot and analysis.kind == "tran":
                 png = out_dir / f"{name}.png"
@@ -104,7 +104,7 @@ def main(args) -> int:
         import pandas as pd
 
         summary = out_dir / "meas_summary.csv"
-        pd.DataFrame(summary_rows).to_csv(summary, index=False, float_format="%.9g")
+        write_csv(summary, pd.DataFrame(summary_rows).to_dict(orient="list"))
         report["summary"] = str(summary)
         say(f"wrote {summary}")
         if deck.measures:

@@ -23,14 +23,18 @@ class DCResult:
     def __getitem__(self, key):
         return self.signals[key]
 
-    def to_pandas(self):
-        import pandas as pd
-
+    def table(self) -> dict[str, np.ndarray]:
+        """Columns: the swept source's values, then one per signal named with its unit."""
         from ..solution import column_name
 
         data = {f"{self.source}_{self.units.get('_sweep', '')}".rstrip("_"): self.values}
         data.update({column_name(k, self.units[k]): v for k, v in self.signals.items()})
-        return pd.DataFrame(data)
+        return data
+
+    def to_pandas(self):
+        import pandas as pd
+
+        return pd.DataFrame(self.table())
 
 
 @dataclass

@@ -18,10 +18,41 @@ solve, and the Jacobian is only re-evaluated when IDA decides so.
 """
 from __future__ import annotations
 
+import sys
+
 import numpy as np
-from sksundae import ida
 
 from .base import EVENT, FAILED, OK, TSTOP, Integrator, Segment, StepResult
+
+
+def _import_ida():
+    """scikit-sundae's IDA module, without loading all of scipy.optimize.
+
+    scikit-sundae 1.2 imports ``group_columns`` from ``scipy.optimize._numdiff`` when it
+    loads, which runs the whole scipy.optimize package (0.2–0.4 s, more than a small
+    transient).  If scipy.optimize is not loaded yet, its package is registered without
+    running its ``__init__`` just while that one submodule loads, then unregistered with
+    it: a later ``import scipy.optimize`` loads everything afresh, as if for the first time.
+    """
+    if "scipy.optimize" in sys.modules or "sksundae.ida" in sys.modules:
+        from sksundae import ida
+        return ida
+    import importlib.util
+
+    import scipy
+
+    spec = importlib.util.find_spec("scipy.optimize")
+    sys.modules["scipy.optimize"] = importlib.util.module_from_spec(spec)  # __init__ not run
+    try:
+        from sksundae import ida
+    finally:
+        for name in [m for m in sys.modules if m.split(".")[:2] == ["scipy", "optimize"]]:
+            del sys.modules[name]
+        scipy.__dict__.pop("optimize", None)
+    return ida
+
+
+ida = _import_ida()
 
 DENSE_LIMIT = 40  # unknowns up to which the dense linear solver is faster
 PIVOT_THRESHOLD = 0.1  # SuperLU keeps a diagonal pivot ≥ 0.1 × the column's largest entry

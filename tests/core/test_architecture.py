@@ -37,3 +37,17 @@ def test_import_pneunet_stays_light():
             " 'pandas', 'sklearn', 'pint', 'lark', 'networkx') if m in sys.modules]; print(heavy)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]"
+
+
+def test_plain_run_imports_only_what_it_needs(tmp_path):
+    """`pneunet run` without --plot writes its CSV without pandas, networkx, scipy.optimize
+    or matplotlib (their imports would cost more than a small transient)."""
+    netlist = PACKAGE.parent / "netlists" / "oscillator.pn"
+    code = ("import sys; from pneunet.cli import main; "
+            f"status = main(['run', {str(netlist)!r}, '-q', '-o', {str(tmp_path)!r}]); "
+            "print(status, 'sksundae.ida' in sys.modules, [m for m in ('pandas', 'networkx', "
+            "'scipy.optimize', 'matplotlib') if m in sys.modules])")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "0 True []"
+    header = (tmp_path / "tran.csv").read_text().splitlines()[0]
+    assert header.startswith("time_s,") and "p_tank_kPa" in header
