@@ -59,26 +59,24 @@ class MembraneValve(ElementFamily):
         fwd = [m if isinstance(m, ValveParams) else None for m in models]
         self._fwd = _param_arrays(fwd)
         has_backward = any(s.params["backward"] for s in specs)
-        self._bwd = (_param_arrays([s.params["backward"] or m for s, m in zip(specs, fwd)])
-                     if has_backward else None)
+        bwd = _param_arrays([s.params["backward"] or m for s, m in zip(specs, fwd)]) \
+            if has_backward else {}
+        # the backward parameters that differ from the forward ones (None: no backward model)
+        self._bwd = {k: v for k, v in bwd.items() if np.any(v != self._fwd[k])} \
+            if has_backward else None
         self._custom = {}
         for i, m in enumerate(models):
             if not self._analytic[i]:
                 self._custom.setdefault(id(m), (m, []))[1].append(i)
 
     def _analytic_flow(self, p, partials=True):
-        band = self.context.options.flow_band
-        fwd = valve_flow_and_partials(p[..., 0], p[..., 1], p[..., 2], **self._fwd, band=band,
-                                      partials=partials)
-        if self._bwd is None:
-            return fwd
-        bwd = valve_flow_and_partials(p[..., 0], p[..., 1], p[..., 2], **self._bwd, band=band,
-                                      partials=partials)
-        forward = p[..., 0] >= p[..., 1]
-        mdot = np.where(forward, fwd[0], bwd[0])
-        if not partials:
-            return mdot, None
-        return mdot, tuple(np.where(forward, a, b) for a, b in zip(fwd[1], bwd[1]))
+        params = self._fwd
+        if self._bwd is not None:  # each valve's parameters for its flow direction
+            forward = p[..., 0] >= p[..., 1]
+            params = dict(params, **{k: np.where(forward, params[k], b)
+                                     for k, b in self._bwd.items()})
+        return valve_flow_and_partials(p[..., 0], p[..., 1], p[..., 2], **params,
+                                       band=self.context.options.flow_band, partials=partials)
 
     def outflows(self, t, p, pdot):
         mdot, (d_in, d_out, d_ctrl) = self._analytic_flow(p)

@@ -112,15 +112,15 @@ class FoldMonitor:
 
         Follows dy_a/dτ = f = −F_a/s_a (τ dimensionless, s_a the row scale) by
         linearly implicit Euler steps (I + Δτ·J_aa/s_a)·Δy = Δτ·f that go along f,
-        with Δτ set by the Euler error estimate Δτ/2·|f(y+Δy) − f(y)| ≤ 1 % of the
-        pressure: slow
-        through the ghost of the vanished branch, then growing until each step is
-        Newton's and converges quadratically onto the branch the relaxation leads
-        to.  A step costs one residual and one J_aa.
+        with Δτ set by the Euler error estimate Δτ/2·|f(y+Δy) − f(y)| ≤ 3 % of the
+        pressure (the first step an Euler step of that size): slow through the ghost
+        of the vanished branch, then growing until each step is Newton's and
+        converges quadratically onto the branch the relaxation leads to.  A step
+        costs one residual and one J_aa.
         """
         full = y.copy()
         res, jac, scale = self._system(t, full)
-        dtau = 1e-2
+        dtau = RELAX_TOL * np.min(full[self.alg] * scale / np.maximum(np.abs(res), 1e-300))
         for _ in range(RELAX_STEPS):
             ya = full[self.alg]
             rate = -res / scale
@@ -160,7 +160,7 @@ class FoldMonitor:
 
 
 RELAX_STEPS = 400  # relaxation steps (accepted or not) before a jump attempt gives up
-RELAX_TOL = 1e-2  # relaxation path error per step, relative to the pressure
+RELAX_TOL = 3e-2  # relaxation path error per step, relative to the pressure
 
 
 def _solve(jac, scale, dtau, rate):
