@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -89,27 +90,39 @@ class Step(Waveform):
 _TINY_S = 1e-300  # turns ramps of zero length into steps without dividing by zero
 
 
-def pulse_phase(t, delay, period):
-    """Time since the start of the current PULSE cycle (s); negative before ``delay``.
+class PulseTable:
+    """The timing of one or many PULSEs (floats or arrays, s), prepared once.
 
-    Elementwise: every argument may be an array (sources evaluated together).
+    :meth:`fraction` evaluates all of them at a time, or at an array of times,
+    elementwise: rising for ``rise``, high for ``width``, falling for ``fall``,
+    repeated every ``period`` (0: once); a ramp of zero length is a step.
     """
-    tau = t - delay
-    periodic = period > 0
-    return np.where(periodic & (tau >= 0), np.fmod(tau, np.where(periodic, period, 1.0)), tau)
 
+    def __init__(self, delay, rise, width, fall, period):
+        rise, width, fall, period = (np.asarray(x, dtype=float)
+                                     for x in (rise, width, fall, period))
+        self._delay = np.asarray(delay, dtype=float)
+        self._periodic = period > 0
+        self._period = np.where(self._periodic, period, 1.0)
+        self._step_up = np.where(rise > 0, 0.0, _TINY_S)
+        self._rise = rise + self._step_up
+        self._end = rise + width + fall
+        self._fall = np.where(fall > 0, fall, _TINY_S)
+        self._steps = bool(np.any(rise == 0) or np.any(fall == 0))  # ramps divided by _TINY_S
 
-def pulse_fraction(tau, rise, width, fall):
-    """Fraction 0…1 of a PULSE's swing at phase ``tau`` (s), elementwise.
+    def fraction(self, t):
+        """Fraction 0…1 of each pulse's swing at time ``t`` (s)."""
+        tau = t - self._delay  # time since the start of the current cycle
+        tau = np.where(self._periodic & (tau >= 0), np.fmod(tau, self._period), tau)
+        if not self._steps:
+            return self._clip(tau)
+        with np.errstate(over="ignore"):
+            return self._clip(tau)
 
-    Rising for ``rise``, high for ``width``, falling for ``fall``; a ramp of zero
-    length is a step: high from tau = 0 on, low again from tau = rise + width on.
-    """
-    step_up = np.where(rise > 0, 0.0, _TINY_S)
-    with np.errstate(over="ignore"):
-        up = (tau + step_up) / (rise + step_up)
-        down = (rise + width + fall - tau) / np.where(fall > 0, fall, _TINY_S)
-    return np.clip(np.minimum(up, down), 0.0, 1.0)
+    def _clip(self, tau):
+        up = (tau + self._step_up) / self._rise
+        down = (self._end - tau) / self._fall
+        return np.maximum(np.minimum(np.minimum(up, down), 1.0), 0.0)
 
 
 @dataclass(frozen=True)
@@ -134,9 +147,12 @@ class Pulse(Waveform):
                 f"PULSE period {self.period} s is shorter than rise + width + fall "
                 f"({self.rise + self.width + self.fall} s)")
 
+    @cached_property
+    def _table(self) -> PulseTable:
+        return PulseTable(self.delay, self.rise, self.width, self.fall, self.period)
+
     def value(self, t):
-        tau = pulse_phase(np.asarray(t, dtype=float), self.delay, self.period)
-        frac = pulse_fraction(tau, self.rise, self.width, self.fall)
+        frac = self._table.fraction(np.asarray(t, dtype=float))
         out = self.low + (self.high - self.low) * frac
         return out if out.ndim else float(out)
 

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..waveforms import Constant, Pulse, pulse_fraction, pulse_phase
+from ..waveforms import Constant, Pulse, PulseTable
 from . import register
 from .base import ElementFamily, Param
 
@@ -16,8 +16,9 @@ def _waveform_times(family, method, t_start, t_stop):
 class _WaveformBank:
     """Values of many waveforms at one time: PULSE and constants vectorised.
 
-    PULSE uses the same elementwise functions as :meth:`pneunet.waveforms.Pulse.value`,
-    so results are identical; other waveforms are evaluated one by one.
+    PULSE uses the same :class:`~pneunet.waveforms.PulseTable` as
+    :meth:`pneunet.waveforms.Pulse.value`, so results are identical; other waveforms
+    are evaluated one by one.
     """
 
     def __init__(self, waveforms):
@@ -27,9 +28,11 @@ class _WaveformBank:
         self._const = np.flatnonzero(kinds == 0)
         self._level = np.array([float(waveforms[i].level) for i in self._const])
         self._pulse = np.flatnonzero(kinds == 1)
-        cols = ("low", "high", "delay", "rise", "fall", "width", "period")
-        self._p = {k: np.array([getattr(waveforms[i], k) for i in self._pulse], dtype=float)
-                   for k in cols}
+        cols = ("low", "high", "delay", "rise", "width", "fall", "period")
+        p = {k: np.array([getattr(waveforms[i], k) for i in self._pulse], dtype=float)
+             for k in cols}
+        self._low, self._swing = p["low"], p["high"] - p["low"]
+        self._table = PulseTable(*(p[k] for k in cols[2:]))
         self._other = [(i, waveforms[i]) for i in np.flatnonzero(kinds == 2)]
 
     def value(self, t):
@@ -38,10 +41,7 @@ class _WaveformBank:
         out = np.empty(t.shape + (self.n,))
         out[..., self._const] = self._level
         if self._pulse.size:
-            p = self._p
-            tau = pulse_phase(t[..., None], p["delay"], p["period"])
-            frac = pulse_fraction(tau, p["rise"], p["width"], p["fall"])
-            out[..., self._pulse] = p["low"] + (p["high"] - p["low"]) * frac
+            out[..., self._pulse] = self._low + self._swing * self._table.fraction(t[..., None])
         for i, wave in self._other:
             out[..., i] = wave.value(t)
         return out
