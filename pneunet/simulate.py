@@ -84,9 +84,9 @@ def transient(circuit, t_stop: float, *, t_step: float | None = None, t_start: f
     progress show a progress bar (tqdm) over simulated time
 
     The integrator runs segment by segment between source breakpoints and branch
-    jumps, storing its internal steps; outputs on the ``t_step`` grid are cubic
-    Hermite interpolants of them (:mod:`pneunet.solvers.interpolate`), so the grid
-    does not set the step size.  Circuits above ``STEP_STORE_LIMIT`` unknowns let
+    jumps (restarted only after a jump), storing its internal steps; outputs on the
+    ``t_step`` grid are cubic Hermite interpolants of them
+    (:mod:`pneunet.solvers.interpolate`), so the grid does not set the step size.  Circuits above ``STEP_STORE_LIMIT`` unknowns let
     IDA interpolate onto the grid itself, so that memory follows the outputs.
     """
     if not t_stop > t_start:
@@ -129,11 +129,14 @@ def transient(circuit, t_stop: float, *, t_step: float | None = None, t_start: f
     bar = _progress(progress, t_start, t_stop)
     retried_at = None
     steps = 0
+    restart = True  # from (t, y, yp); False: IDA continues across a corner of a slope
     try:
         while t < t_stop:
             next_stop = stops[np.searchsorted(stops, t, side="right")]
-            seg = integrator.segment(t, y, yp, next_stop, record.grid_in(t, next_stop))
+            seg = integrator.segment(t, y, yp, next_stop, record.grid_in(t, next_stop),
+                                     restart=restart)
             steps += seg.t.size
+            restart = False
             status = seg.status
             alarm = watch.alarm(seg.t[-1], seg.y[-1]) if status == EVENT else ""
             if alarm:
@@ -152,7 +155,7 @@ def transient(circuit, t_stop: float, *, t_step: float | None = None, t_start: f
                     except SolverError:
                         status = EVENT  # the branch has already ended here: jump
                     else:
-                        t = last_t
+                        t, restart = last_t, True
                         folds.restart(t, y)
                         continue
                 elif folds.near_fold(last_t, last_y):
@@ -171,9 +174,11 @@ def transient(circuit, t_stop: float, *, t_step: float | None = None, t_start: f
                 record.jump(t, y)
                 yp = dae.derivative(t, y)
                 folds.restart(t, y)
+                restart = True
             elif round(t, 12) in jumps and t < t_stop:
                 y, yp = consistent_state(dae, t, y)
                 record.point(t, y)
+                restart = True
                 if folds is not None:
                     folds.restart(t, y)
             if bar is not None:
@@ -252,7 +257,7 @@ class _Watch:
     """The integrator's event function: it crosses zero downwards at a fold (see
     :class:`~pneunet.solvers.folds.FoldMonitor`), where a pressure falls to
     VACUUM_KPA, or once 1000 steps in a row were shorter than ``tiny`` s — a
-    stalled integration — so that the compiled step loop always returns."""
+    stalled integration — so that IDA's step loop always returns."""
 
     def __init__(self, folds, tiny):
         self.folds, self.tiny = folds, tiny

@@ -1,10 +1,10 @@
 """What a transient backend provides: an integrator of F(t, y, ẏ) = 0 with events.
 
-The driver (:mod:`pneunet.simulate`) asks for *segments*: from a consistent state
-to the next stop (a source breakpoint or the end), every internal step stored,
-ending early at a root of the event function or at a failure.  Backends that can
-run a whole segment in compiled code override :meth:`Integrator.segment`; the
-default builds it from single steps.
+The driver (:mod:`pneunet.simulate`) asks for *segments*: to the next stop (a
+source breakpoint or the end), every internal step stored, ending early at a root
+of the event function or at a failure.  A segment restarts the integrator from a
+consistent state after a jump; across a corner where only a slope changes it
+continues, keeping the step size, order and Jacobian.
 """
 from __future__ import annotations
 
@@ -61,13 +61,15 @@ class Integrator(ABC):
         """Advance towards ``target`` without passing ``tstop``."""
 
     def segment(self, t0: float, y0: np.ndarray, yp0: np.ndarray, t_end: float,
-                outputs: np.ndarray | None = None) -> Segment:
-        """Restart at ``t0`` and integrate to ``t_end``.
+                outputs: np.ndarray | None = None, restart: bool = True) -> Segment:
+        """Integrate from ``t0`` to ``t_end``: restarted at (t0, y0, yp0), or continued
+        from where the last segment ended (``restart`` False).
 
         ``outputs`` None stores every internal step; else the rows are the output
         times in (t0, t_end) (the integrator's own interpolation) and the end.
         """
-        self.init(t0, y0, yp0)
+        if restart:
+            self.init(t0, y0, yp0)
         targets = [t_end] if outputs is None else [*outputs, t_end]
         k = 0
         ts, ys, yps = [], [], []

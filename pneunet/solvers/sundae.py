@@ -22,7 +22,7 @@ import sys
 
 import numpy as np
 
-from .base import EVENT, FAILED, OK, TSTOP, Integrator, Segment, StepResult
+from .base import EVENT, FAILED, OK, TSTOP, Integrator, StepResult
 
 
 def _import_ida():
@@ -121,16 +121,6 @@ class SundaeIntegrator(Integrator):
         result = self._solver.init_step(t, y, yp)
         if result.status < 0:
             raise RuntimeError(result.message)
-
-    def segment(self, t0, y0, yp0, t_end, outputs=None):
-        """The whole segment in one call: IDA's loop runs in compiled code."""
-        tspan = [t0, t_end] if outputs is None else [t0, *outputs, t_end]
-        r = self._solver.solve(np.array(tspan), y0, yp0)
-        t = np.asarray(r.t, dtype=float)
-        keep = np.flatnonzero(np.diff(t) > 0) + 1  # drop the start and repeated rows
-        status = {1: TSTOP, 2: EVENT}.get(r.status, FAILED if r.status < 0 else TSTOP)
-        return Segment(status, t[keep], np.asarray(r.y)[keep], np.asarray(r.yp)[keep],
-                       r.message)
 
     def step(self, target, tstop, onestep):
         r = self._solver.step(target, method="onestep" if onestep else "normal", tstop=tstop)
