@@ -2,8 +2,14 @@
 
 The form of Simscape Gas' constant-volume chamber and Modelica's fluid volumes: ideal
 gas of heat-capacity ratio γ in a rigid volume V whose walls stay at the circuit's
-temperature T_w, heat flowing to the gas as Q = m·c_v·(T_w − T)/τ (τ: the gas' thermal
-time constant, s; τ → 0 is isothermal, τ → ∞ adiabatic).  The volume is filled and
+temperature T_w, heat flowing to the gas as Q = hA·(T_w − T) with the wall conductance
+
+    hA = m_ref·c_v/τ · (m/m_ref)^s,      m_ref = p_ref·V·M/(R·T_w)
+
+τ is the gas' thermal time constant at the reference state (s; τ → 0 isothermal, τ → ∞
+adiabatic).  ``scaling`` s = 0 (default) is the constant conductance of Simscape Gas'
+chamber and Modelica's volumes; s = 1 a conductance proportional to the gas mass
+(the same τ at every pressure).  The volume is filled and
 emptied through its one port; the gas entering carries the enthalpy of the circuit
 (T_w: flow through restrictions is isenthalpic), the gas leaving the volume's own:
 
@@ -15,9 +21,9 @@ The gas temperature is a second unknown, carried at the element's second node (p
 starts at θ = p_ref (T = T_w) and the assembler treats it like any storage node.
 Eliminating the mass derivative, the flow at the gas node depends on ṗ alone:
 
-    s = C·ṗ − C·p·(T_w/T − 1)/τ,   q = s/γ (s ≥ 0)   or   q = s·T_w/(γ·T) (s < 0)
+    s = C·ṗ − H,   H = C·(p/θ)^s·(p_ref − θ)/τ,   q = s/γ (s ≥ 0)   or   q = s·T_w/(γ·T) (s < 0)
 
-with C = M·V/(R·T_w) (mg/kPa); the ``heat`` node's residual is the mass balance
+with C = M·V/(R·T_w) (mg/kPa) and m/m_ref = p/θ; the ``heat`` node's residual is the mass balance
 q − C·(p_ref/θ)·(ṗ − p·θ̇/θ) = 0 (mg/s).  Signal ``T_<name>`` is the gas temperature, K.
 """
 from __future__ import annotations
@@ -43,6 +49,9 @@ class ThermalVolume(ElementFamily):
                      "adiabatic)", low=0.0, low_inclusive=False),
         "gamma": Param("dimensionless", "heat-capacity ratio c_p/c_v (1.4 air)", low=1.0,
                        high=1.67, default=1.4, low_inclusive=False),
+        "scaling": Param("dimensionless", "exponent s of the gas mass in the wall "
+                         "conductance: 0 constant hA (Simscape, Modelica), 1 constant τ",
+                         low=0.0, high=1.0, default=0.0),
         "p0": Param("pressure", "initial absolute pressure, kPa (default: ambient)", low=0.0,
                     low_inclusive=False, default=np.nan),
     }
@@ -53,6 +62,7 @@ class ThermalVolume(ElementFamily):
         self._c = context.gas.capacitance(self.column("V"), opts.temperature)
         self._tau = self.column("tau")
         self._gamma = self.column("gamma")
+        self._scaling = self.column("scaling")
         p0 = self.column("p0")
         self._p_ref = np.where(np.isnan(p0), opts.ambient, p0)
         self._t_wall = opts.temperature
@@ -61,7 +71,7 @@ class ThermalVolume(ElementFamily):
         u, w = p[..., 0], p[..., 1]
         ud, wd = pdot[..., 0], pdot[..., 1]
         c, tau, g, pr = self._c, self._tau, self._gamma, self._p_ref
-        heat = c * u * (pr / w - 1.0) / tau
+        heat = c * (u / w) ** self._scaling * (pr - w) / tau
         s = c * ud - heat
         k = np.where(s >= 0, 1.0, pr / w)  # T_w / T_up
         q = k * s / g
@@ -75,8 +85,11 @@ class ThermalVolume(ElementFamily):
     def outflows(self, t, p, pdot):
         u, w, ud, wd, s, k, q, mass = self._terms(p, pdot)
         c, tau, g, pr = self._c, self._tau, self._gamma, self._p_ref
-        dheat_du = c * (pr / w - 1.0) / tau
-        dheat_dw = -c * u * pr / (tau * w ** 2)
+        sc = self._scaling
+        ratio = (u / w) ** sc
+        heat = c * ratio * (pr - w) / tau
+        dheat_du = sc * heat / u
+        dheat_dw = -c * ratio / tau - sc * heat / w
         # q = k·s/γ; k depends on w only where s < 0
         dk_dw = np.where(s >= 0, 0.0, -pr / w ** 2)
         dq_du = -k * dheat_du / g

@@ -301,7 +301,8 @@ def _fit_data(df, window, base: TraceFit):
     cols = {signal_of_column(c): c for c in df.columns if c != "time_s"}
     meas = {s: df[cols[s]].to_numpy() for s in sigs}
     keep = {s: compared_samples(meas[s])[mask] for s in sigs}
-    return times[mask], sigs, {s: meas[s][mask] for s in sigs}, keep, base.scales
+    return (times[mask], sigs, {s: meas[s][mask] for s in sigs}, keep, base.scales,
+            base.extras.get("alignment"))
 
 
 def _fit_effects(build, df, params, fixed, node, train, effs, base, rows, max_nfev, pool,

@@ -24,6 +24,9 @@ import copy
 from ..errors import ParameterError
 
 STORAGE_KINDS = ("volume", "actuator", "thermal_volume")
+#: a tube at a port of these is a dead volume inside a series resistance: the same
+#: physics as a dead volume at a node plus a refitted resistance, so not offered there
+SERIES_KINDS = ("resistor", "pipe")
 
 
 class CircuitEffect:
@@ -167,7 +170,7 @@ class Tube(CircuitEffect):
         out = []
         for s in circuit.elements.values():
             fam = elements.family(s.kind)
-            if fam.pinned_ports or len(fam.ports) != len(s.nodes):
+            if fam.pinned_ports or len(fam.ports) != len(s.nodes) or s.kind in SERIES_KINDS:
                 continue
             for k, port in enumerate(fam.ports):
                 if port == "heat":

@@ -20,6 +20,7 @@ import numpy as np
 from ..errors import DataError, ParameterError, PneunetError
 from ..truth.intervals import intervals
 from ..truth.lsq import least_squares_log
+from .align import Alignment
 from .data import compared_samples, read_trace, signal_of_column
 from .model import DIFF_STEP, FIT_OPTIONS, TraceModel, TraceResidual, sample_at
 
@@ -78,7 +79,7 @@ class TraceFit:
                 "sigma": self.sigma, "nfev": self.nfev, "success": self.success,
                 "message": self.message, "effects": [e.name for e in self.effects],
                 "wall_time_s": self.wall_time_s, "unit": self.unit,
-                **{k: v for k, v in self.extras.items() if k != "stage1"}}
+                **{k: v for k, v in self.extras.items() if k not in ("stage1", "alignment")}}
 
     def report(self) -> str:
         lines = ["parameter        estimate      95 % CI"]
@@ -113,7 +114,8 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
               node: str | None = None, window=None, effects=(), max_nfev: int = 40,
               confidence: float = 0.95, phase_bins: int = 20, start: str = "ic",
               features: bool = True, diff_step: float = DIFF_STEP, options: dict | None = None,
-              pool=None, x_start: dict | None = None, where: str | None = None) -> TraceFit:
+              pool=None, x_start: dict | None = None, where: str | None = None,
+              align: bool = True) -> TraceFit:
     """Estimate ``params`` ({name: (guess, low, high)}) so the circuit reproduces ``data``.
 
     ``build(point) -> Circuit`` (or a :class:`~pneunet.analysis.sweep.NetlistBuilder`)
@@ -124,7 +126,8 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
     options (default :data:`~pneunet.traces.model.FIT_OPTIONS`); ``max_nfev``: cap on
     the simulations of the least-squares stage (Jacobian included); ``pool``: an
     executor for the Jacobian's columns; ``x_start``: starting values (skips the
-    cycle stage).
+    cycle stage); ``align``: compare an oscillating record cycle by cycle, each
+    simulated cycle started at its own crossing (:mod:`pneunet.traces.align`).
 
     Two stages: with ``features`` and an oscillating record at ``node``, starting
     values from the cycle (:mod:`pneunet.traces.start`); then Levenberg–Marquardt on
@@ -159,9 +162,12 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
     scales = {s: 1.0 if unit == "kPa" else max(np.ptp(meas[s]), 1e-9) / 100.0 for s in sigs}
     keep_all = {s: compared_samples(meas[s]) for s in sigs}
     t_fit = times[mask]
-    fun = TraceResidual(model, names, t_fit, sigs, {s: meas[s][mask] for s in sigs},
-                        {s: keep_all[s][mask] for s in sigs}, scales)
     node = node or next((s[2:] for s in sigs if s.startswith("p_")), None)
+    aligned = None
+    if align and node and f"p_{node}" in meas:
+        aligned = Alignment.of(times, meas[f"p_{node}"], f"p_{node}")
+    fun = TraceResidual(model, names, t_fit, sigs, {s: meas[s][mask] for s in sigs},
+                        {s: keep_all[s][mask] for s in sigs}, scales, aligned)
     stage1 = None
     if x_start is not None:
         x0 = np.clip(np.log([x_start.get(k, params[k][0]) for k in names]), lb, ub)
@@ -183,7 +189,7 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
                              confidence=confidence)
     import pandas as pd
 
-    sim, sol = model.sample(est, times, sigs)
+    sim, sol = model.sample(est, times, sigs, aligned)
     ref = meas[f"p_{node}"] if node and f"p_{node}" in meas else meas[sigs[0]]
     phase = phase_of(times, ref)
     resid = {s: np.where(keep_all[s], sim[s] - meas[s], np.nan) for s in sigs}
@@ -203,6 +209,7 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
                     res.message + (f"; {fun.failures} failed simulations" if fun.failures else ""),
                     tuple(effects), sol, time.perf_counter() - wall, unit, scales,
                     {"stage1": stage1, "simulations": nfev, "intervals": info,
+                     "alignment": aligned,
                      "compared": {s: int(keep_all[s].sum()) for s in sigs}})
 
 

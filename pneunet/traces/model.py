@@ -7,17 +7,23 @@ a process pool evaluates in parallel.
 """
 from __future__ import annotations
 
+import contextlib
+import time
 from typing import Callable
 
 import numpy as np
 
-from ..errors import PneunetError
+from ..errors import PneunetError, SolverError
 
 #: simulator settings of the fit's simulations: the Jacobian is taken by forward
 #: differences with a step of :data:`DIFF_STEP` in ln value, so the simulator's own
 #: error (rtol 1e-6: < 0.005 kPa on sampled tank pressures of the oscillator) must be
-#: far below the response to a 0.5 % change (~0.5 kPa)
-FIT_OPTIONS = {"rtol": 1e-6, "atol": 1e-6}
+#: far below the response to a 0.5 % change (~0.5 kPa).  A 1e-4 mL dead volume at the
+#: algebraic nodes crosses the folds as fast transients: the explicit jumps land up to
+#: ~1 ms late or early at each fold (0.1–0.5 kPa in a 50 mL oscillator), a bias larger
+#: than a recording's parameter precision; the dead-volume limit agrees with a
+#: stand-alone integration to 0.03 kPa rms
+FIT_OPTIONS = {"rtol": 1e-6, "atol": 1e-6, "dead_volume": 1e-4}
 DIFF_STEP = 5e-3
 
 
@@ -29,6 +35,7 @@ class TraceModel:
         self.build, self.fixed, self.effects, self.start = build, dict(fixed or {}), tuple(effects), start
         self.options = dict(options or {})
         self.calls = 0
+        self._times = []
 
     def circuit(self, values: dict):
         from ..analysis.sweep import apply_overrides
@@ -47,14 +54,68 @@ class TraceModel:
         return any(name in e.params for e in self.effects)
 
     def simulate(self, values: dict, t_end: float, t_step: float | None = None):
+        """The transient to ``t_end``; a :class:`~pneunet.errors.SolverError` when it
+        takes more than :data:`BUDGET_FACTOR` × the median simulation so far (at least
+        :data:`BUDGET_MIN_S`): a fit's trial point that makes the circuit stiff or
+        chattering is a failed point, not minutes lost."""
         self.calls += 1
-        return self.circuit(values).tran(t_end, t_step=t_step, start=self.start)
+        circuit = self.circuit(values)
+        budget = max(BUDGET_MIN_S, BUDGET_FACTOR * float(np.median(self._times))) \
+            if self._times else None
+        start = time.perf_counter()
+        with wall_clock_budget(budget):
+            sol = circuit.tran(t_end, t_step=t_step, start=self.start)
+        self._times.append(time.perf_counter() - start)
+        return sol
 
-    def sample(self, values: dict, times, signals):
-        """({signal: samples at ``times``}, solution); output on the sample spacing."""
+    def sample(self, values: dict, times, signals, align=None):
+        """({signal: samples at ``times``}, solution); output on the sample spacing.
+
+        With ``align`` (:class:`~pneunet.traces.align.Alignment`) each recorded cycle
+        is compared with the simulated cycle of the same number, started at its own
+        crossing (the simulation runs ``align.margin`` past the record)."""
         dt = float(np.median(np.diff(times))) if len(times) > 1 else None
-        sol = self.simulate(values, float(times[-1]), dt)
-        return {s: sample_at(sol.t, sol[s], times) for s in signals}, sol
+        t_end = float(times[-1]) + (align.margin if align is not None else 0.0)
+        sol = self.simulate(values, t_end, dt)
+        at = times if align is None else align.model_times(times, sol.t, sol[align.signal])
+        return {s: sample_at(sol.t, sol[s], at) for s in signals}, sol
+
+
+#: a simulation may take this many times the median one before it counts as failed
+BUDGET_FACTOR = 20.0
+BUDGET_MIN_S = 5.0
+
+
+class _OverBudget(Exception):
+    pass
+
+
+@contextlib.contextmanager
+def wall_clock_budget(seconds: float | None):
+    """Raise :class:`~pneunet.errors.SolverError` when the block runs longer than
+    ``seconds`` (SIGALRM; only in a process' main thread, else no limit)."""
+    import signal
+    import threading
+
+    if seconds is None or threading.current_thread() is not threading.main_thread() \
+            or not hasattr(signal, "setitimer"):
+        yield
+        return
+
+    def alarm(*_):
+        raise _OverBudget()
+
+    previous = signal.signal(signal.SIGALRM, alarm)
+    signal.setitimer(signal.ITIMER_REAL, seconds)
+    try:
+        yield
+    except _OverBudget:
+        raise SolverError(f"simulation stopped after {seconds:.3g} s (its budget)",
+                          hint="the trial parameters make the circuit far slower to "
+                               "simulate than the others") from None
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, previous)
 
 
 def sample_at(t, y, times):
@@ -73,9 +134,9 @@ class TraceResidual:
     ``x``; a failed simulation gives a large constant residual.  Picklable."""
 
     def __init__(self, model: TraceModel, names, times, signals, measured: dict, keep: dict,
-                 scales: dict):
+                 scales: dict, align=None):
         self.model, self.names, self.times, self.signals = model, list(names), times, signals
-        self.measured, self.keep, self.scales = measured, keep, scales
+        self.measured, self.keep, self.scales, self.align = measured, keep, scales, align
         self.failures = 0
 
     def size(self) -> int:
@@ -84,7 +145,7 @@ class TraceResidual:
     def __call__(self, x):
         values = dict(zip(self.names, np.exp(x)))
         try:
-            sim, _ = self.model.sample(values, self.times, self.signals)
+            sim, _ = self.model.sample(values, self.times, self.signals, self.align)
         except PneunetError:
             self.failures += 1
             return np.full(self.size(), 1e3)

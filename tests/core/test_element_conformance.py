@@ -68,6 +68,18 @@ def _actuator():
     return c, {"b": 250.0}, dict(kind="actuator", nodes=("b",), V=-3.0)
 
 
+def _thermal_volume():
+    c = Circuit("thermal", ambient=100.0)
+    c.pressure_source("P1", "a", 250.0)
+    c.resistor("R1", "a", "b", R=1.0)
+    c.add("thermal_volume", "VT1", ("b", "bT"), V=30.0, tau=0.5, p0=150.0)  # constant hA
+    c.resistor("R2", "a", "d", R=1.5)
+    c.add("thermal_volume", "VT2", ("d", "dT"), V=20.0, tau=2.0, scaling=1.0)  # constant τ
+    # at rest: source pressure, and the gas at wall temperature (θ = p_ref)
+    return c, {"b": 250.0, "bT": 150.0, "d": 250.0, "dT": 100.0}, dict(
+        kind="thermal_volume", nodes=("b", "bT"), V=10.0, tau=-1.0)
+
+
 def _valve():
     c = Circuit("valve", ambient=96.0)
     c.pressure_source("P1", "a", 500.0)
@@ -79,7 +91,7 @@ def _valve():
 
 CASES = {"pressure_source": _pressure_source, "flow_source": _flow_source,
          "resistor": _resistor, "pipe": _pipe, "volume": _volume, "actuator": _actuator,
-         "valve": _valve}
+         "valve": _valve, "thermal_volume": _thermal_volume}
 
 
 def test_every_registered_family_has_a_conformance_case():

@@ -1,0 +1,60 @@
+"""``pneunet fit-trace``: bad recordings give exit code 2 with the file, the column and
+what to do; ``--json`` prints only JSON on stdout."""
+import json
+
+import numpy as np
+import pytest
+
+from pneunet.cli import main
+
+from .standalone import oscillator_record
+
+
+@pytest.fixture(scope="module")
+def record():
+    return oscillator_record(6.0, noise=0.4, seed=3)
+
+
+def run(capfd, *args):
+    code = main(["fit-trace", *map(str, args)])
+    out, err = capfd.readouterr()
+    return code, out, err
+
+
+@pytest.mark.parametrize("damage, words", [
+    (lambda df: df.drop(columns="time_s"), ["time_s"]),
+    (lambda df: df.assign(p_tank_kPa=np.where(df.index == 7, np.nan, df.p_tank_kPa)),
+     ["p_tank_kPa", "missing", "row"]),
+    (lambda df: df.iloc[[0, 2, 1] + list(range(3, len(df)))], ["time_s", "goes back", "sort"]),
+    (lambda df: df.iloc[[0, 1, 1] + list(range(2, len(df)))], ["time_s", "repeats"]),
+    (lambda df: df.rename(columns={"p_out_kPa": "p_nowhere_kPa"}), ["p_nowhere_kPa",
+                                                                     "no node"]),
+])
+def test_broken_recordings_exit_2_naming_file_and_column(tmp_path, capfd, record, damage, words):
+    path = tmp_path / "rec.csv"
+    damage(record).to_csv(path, index=False)
+    code, out, err = run(capfd, path, "--fit", "Rvent=3:1:10", "--json")
+    assert code == 2 and out == ""
+    assert str(path) in err and "Traceback" not in err
+    for w in words:
+        assert w in err, (w, err)
+
+
+def test_record_shorter_than_two_cycles_is_refused(tmp_path, capfd, record):
+    path = tmp_path / "short.csv"
+    record[record.time_s <= 1.5].to_csv(path, index=False)
+    code, out, err = run(capfd, path, "--fit", "Rvent=3:1:10", "--candidates")
+    assert code == 2 and "cycle" in err and "record longer" in err
+
+
+def test_json_is_the_only_thing_on_stdout(tmp_path, capfd, record):
+    path = tmp_path / "rec.csv"
+    record.to_csv(path, index=False)
+    code, out, err = run(capfd, path, "--fit", "Rvent=3.5:1:10", "--set", "V=50",
+                         "--max-nfev", "8", "--json", "--no-progress")
+    assert code == 0
+    j = json.loads(out)  # nothing but JSON
+    assert set(j["fit"]["values"]) == {"Rvent"}
+    lo, hi = j["fit"]["ci"]["Rvent"]
+    assert lo < j["fit"]["values"]["Rvent"] < hi
+    assert j["fit"]["values"]["Rvent"] == pytest.approx(3.0, rel=0.02)
