@@ -59,10 +59,11 @@ class MembraneValve(ElementFamily):
         fwd = [m if isinstance(m, ValveParams) else None for m in models]
         self._fwd = _param_arrays(fwd)
         has_backward = any(s.params["backward"] for s in specs)
-        bwd = _param_arrays([s.params["backward"] or m for s, m in zip(specs, fwd)]) \
-            if has_backward else {}
-        # the backward parameters that differ from the forward ones (None: no backward model)
-        self._bwd = {k: v for k, v in bwd.items() if np.any(v != self._fwd[k])} \
+        # forward and backward parameters stacked (6, n) in the law's order (None: no
+        # backward model)
+        self._both = (np.array(list(self._fwd.values())),
+                      np.array(list(_param_arrays([s.params["backward"] or m for s, m in
+                                                   zip(specs, fwd)]).values()))) \
             if has_backward else None
         self._custom = {}
         for i, m in enumerate(models):
@@ -70,12 +71,12 @@ class MembraneValve(ElementFamily):
                 self._custom.setdefault(id(m), (m, []))[1].append(i)
 
     def _analytic_flow(self, p, partials=True):
-        params = self._fwd
-        if self._bwd is not None:  # each valve's parameters for its flow direction
-            forward = p[..., 0] >= p[..., 1]
-            params = dict(params, **{k: np.where(forward, params[k], b)
-                                     for k, b in self._bwd.items()})
-        return valve_flow_and_partials(p[..., 0], p[..., 1], p[..., 2], **params,
+        if self._both is None:
+            params = self._fwd.values()
+        else:  # each valve's parameters for its flow direction: (6, ..., n)
+            forward = (p[..., 0] >= p[..., 1])[..., None, :]
+            params = np.moveaxis(np.where(forward, *self._both), -2, 0)
+        return valve_flow_and_partials(p[..., 0], p[..., 1], p[..., 2], *params,
                                        band=self.context.options.flow_band, partials=partials)
 
     def outflows(self, t, p, pdot):
