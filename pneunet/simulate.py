@@ -16,17 +16,20 @@ from .errors import SolverError
 from .solution import LazySignals, OperatingPoint, Solution
 from .solvers import available_backends
 from .solvers.base import EVENT, FAILED, Segment
-from .solvers.newton import newton
+from .solvers.newton import DENSE_LIMIT, newton
 
 VACUUM_KPA = 0.1  # absolute pressure below which a circuit has left its physical range
 
 
-def _residual_jac(dae, t, ydot=None):
-    zeros = np.zeros(dae.n) if ydot is None else ydot
+def _residual_jac(dae, t):
+    """F(t, y, ẏ = 0) and, when asked, ∂F/∂y (dense for small circuits) for :func:`newton`."""
+    zeros = np.zeros(dae.n)
 
-    def fn(y):
+    def fn(y, jacobian):
+        if not jacobian:
+            return dae.evaluate(t, y, zeros)[0], None
         res, data = dae.evaluate(t, y, zeros, cj=0.0)
-        return res, dae.csc(data)
+        return res, dae.dense(data) if dae.n <= DENSE_LIMIT else dae.csc(data)
     return fn
 
 

@@ -23,7 +23,16 @@ class NewtonResult:
     residual: float
 
 
+DENSE_LIMIT = 40  # unknowns up to which Jacobians are dense arrays (LAPACK, no scipy.sparse)
+
+
 def _solve(matrix, rhs):
+    """matrix⁻¹·rhs for a dense array or a scipy sparse matrix; None if singular."""
+    if isinstance(matrix, np.ndarray):
+        try:
+            return np.linalg.solve(matrix, rhs)
+        except np.linalg.LinAlgError:
+            return None
     from scipy.sparse.linalg import splu
 
     try:
@@ -32,11 +41,20 @@ def _solve(matrix, rhs):
         return None
 
 
+def _block(jac, active):
+    """The rows and columns ``active`` of a dense or sparse Jacobian."""
+    if isinstance(jac, np.ndarray):
+        return jac[np.ix_(active, active)]
+    return jac.tocsr()[np.ix_(active, active)]
+
+
 def newton(residual_jac, y0, active, *, scale=None, capacitance=None, tol=1e-9,
            max_iter=60, max_ptc_iter=2000) -> NewtonResult:
     """Find y with F(y)[active] = 0.
 
-    residual_jac(y) -> (F, J): residual (n,) and scipy sparse Jacobian (n, n).
+    residual_jac(y, jacobian) -> (F, J): residual (n,) and, when ``jacobian``, the
+    Jacobian (n, n) as a dense array or scipy sparse matrix (else None); trial
+    points of the line search only need F.
     scale: typical magnitude of y (kPa), for the step criterion.
     capacitance: per-unknown pseudo capacitance for continuation (mg/kPa).
     """
@@ -45,19 +63,18 @@ def newton(residual_jac, y0, active, *, scale=None, capacitance=None, tol=1e-9,
     if active.size == 0:
         return NewtonResult(y, True, 0, 0.0)
     scale = np.maximum(np.abs(y[active]), 1.0) if scale is None else scale
-    f, jac = residual_jac(y)
+    f, jac = residual_jac(y, True)
     norm = np.max(np.abs(f[active]))
     flow_scale = max(norm, 1.0)
-    sub = np.ix_(active, active)
     for it in range(max_iter):
-        step = _solve(jac.tocsr()[sub], -f[active])
+        step = _solve(_block(jac, active), -f[active])
         if step is None or not np.all(np.isfinite(step)):
             break
         lam = 1.0
         while lam > 1e-4:
             trial = y.copy()
             trial[active] += lam * step
-            f_trial, jac_trial = residual_jac(trial)
+            f_trial = residual_jac(trial, False)[0]
             norm_trial = np.max(np.abs(f_trial[active]))
             if np.isfinite(norm_trial) and np.all(trial[active] > 0) and \
                     norm_trial < norm * (1 - 1e-4 * lam) + 1e-14:
@@ -65,38 +82,43 @@ def newton(residual_jac, y0, active, *, scale=None, capacitance=None, tol=1e-9,
             lam *= 0.5
         else:
             break
-        y, f, jac, norm = trial, f_trial, jac_trial, norm_trial
+        y, norm = trial, norm_trial
         if np.max(np.abs(lam * step) / scale) < tol and norm < 1e-6 * flow_scale:
             return NewtonResult(y, True, it + 1, norm)
+        f, jac = residual_jac(y, True)
     if capacitance is None:
         return NewtonResult(y, False, max_iter, norm)
     return _continuation(residual_jac, y, active, scale, capacitance, tol, max_ptc_iter, flow_scale)
 
 
 def _continuation(residual_jac, y, active, scale, capacitance, tol, max_iter, flow_scale):
-    from scipy.sparse import diags
-
-    sub = np.ix_(active, active)
     cap = np.asarray(capacitance, dtype=float)[active]
-    f, jac = residual_jac(y)
+    f, jac = residual_jac(y, True)
     norm0 = norm = np.max(np.abs(f[active]))
     dtau = 1e-4
     for it in range(max_iter):
-        matrix = jac.tocsr()[sub] + diags(cap / dtau)
-        step = _solve(matrix, -f[active])
+        block = _block(jac, active)
+        if isinstance(block, np.ndarray):
+            block[np.diag_indices_from(block)] += cap / dtau
+        else:
+            from scipy.sparse import diags
+
+            block = block + diags(cap / dtau)
+        step = _solve(block, -f[active])
         if step is None or not np.all(np.isfinite(step)):
             dtau *= 0.1
             continue
         trial = y.copy()
         trial[active] += step
-        f_trial, jac_trial = residual_jac(trial)
+        f_trial = residual_jac(trial, False)[0]
         norm_trial = np.max(np.abs(f_trial[active]))
         if not np.isfinite(norm_trial) or np.any(trial[active] <= 0):
             dtau *= 0.25
             continue
-        y, f, jac = trial, f_trial, jac_trial
+        y = trial
         dtau = min(dtau * max(norm / max(norm_trial, 1e-300), 0.5) * 1.5, 1e12)
         norm = norm_trial
         if np.max(np.abs(step) / scale) < tol and norm < 1e-6 * max(flow_scale, norm0):
             return NewtonResult(y, True, it + 1, norm)
+        f, jac = residual_jac(y, True)
     return NewtonResult(y, False, max_iter, norm)
