@@ -141,10 +141,14 @@ class Solution:
         """All signals at the last time point."""
         return {k: float(v[-1]) for k, v in self.signals.items()}
 
-    def table(self) -> dict[str, np.ndarray]:
-        """Columns: ``time_s`` and one per signal named with its unit."""
+    def table(self, select: Callable[[str], bool] | None = None) -> dict[str, np.ndarray]:
+        """Columns: ``time_s`` and one per signal named with its unit; with ``select``
+        only the columns whose name it accepts (the others are never computed)."""
         data = {"time_s": self.t}
-        data.update({column_name(k, self.units[k]): v for k, v in self.signals.items()})
+        for k in self.signals:
+            name = column_name(k, self.units[k])
+            if select is None or select(name):
+                data[name] = self.signals[k]
         return data
 
     def to_pandas(self):

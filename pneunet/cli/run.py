@@ -70,11 +70,11 @@ def main(args) -> int:
             counts[analysis.kind] = counts.get(analysis.kind, 0) + 1
             suffix = "" if counts[analysis.kind] == 1 else str(counts[analysis.kind])
             name = f"{analysis.kind}{suffix}{tag}"
-            table = result.table()
-            if saves and analysis.kind in ("tran", "dc"):
-                first, *rest = table
-                table = {c: table[c] for c in [first] + [c for c in rest if any(
-                    c.startswith(s + "_") or c == s for s in saves)]}
+            if saves and analysis.kind in ("tran", "dc"):  # only the saved signals
+                table = result.table(lambda c: any(c.startswith(s + "_") or c == s
+                                                   for s in saves))
+            else:
+                table = result.table()
             csv = out_dir / f"{name}.csv"
             write_csv(csv, table)
             files.append(str(csv))

@@ -23,12 +23,15 @@ class DCResult:
     def __getitem__(self, key):
         return self.signals[key]
 
-    def table(self) -> dict[str, np.ndarray]:
-        """Columns: the swept source's values, then one per signal named with its unit."""
+    def table(self, select=None) -> dict[str, np.ndarray]:
+        """Columns: the swept source's values, then one per signal named with its unit
+        (with ``select``, only those whose name it accepts)."""
         from ..solution import column_name
 
         data = {f"{self.source}_{self.units.get('_sweep', '')}".rstrip("_"): self.values}
-        data.update({column_name(k, self.units[k]): v for k, v in self.signals.items()})
+        data.update({name: v for name, v in ((column_name(k, self.units[k]), v)
+                                              for k, v in self.signals.items())
+                     if select is None or select(name)})
         return data
 
     def to_pandas(self):
