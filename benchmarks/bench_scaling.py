@@ -69,7 +69,7 @@ def actuators(n):
 
 def check_times(n):
     """Source corners in [1 s, T_STOP] and T_STOP: every solver lands on them exactly."""
-    from pneunet.assembly import CircuitDAE
+    from pneunet.engine.assembly import CircuitDAE
 
     corners = CircuitDAE(build(min(n, PHASES))).breakpoints(1.0, T_STOP)
     return np.append(corners, T_STOP)
@@ -86,7 +86,7 @@ def sample(t, values, times):
 
 # -- pneunet --------------------------------------------------------------------------------
 def run_pneunet(n, rtol, backend="sksundae"):
-    from pneunet.simulate import transient
+    from pneunet.engine.simulate import transient
 
     circuit = build(n, rtol)
     t0 = time.perf_counter()
@@ -103,7 +103,7 @@ def run_scipy(n, rtol, atol):
     from scipy.integrate import solve_ivp
     from scipy.sparse import diags
 
-    from pneunet.assembly import CircuitDAE
+    from pneunet.engine.assembly import CircuitDAE
 
     circuit = build(n, rtol)
     t0 = time.perf_counter()  # from the same point as pneunet's: assembling the equations
@@ -169,8 +169,8 @@ def spice_netlist(circuit, reltol, t_step, t_stop=T_STOP, dead_capacitance=0.0):
     cannot step across the folds of an algebraic node).  Every unknown node starts
     (``uic``) at pneunet's consistent initial state.
     """
-    from pneunet.assembly import CircuitDAE
-    from pneunet.simulate import consistent_state
+    from pneunet.engine.assembly import CircuitDAE
+    from pneunet.engine.simulate import consistent_state
 
     dae = CircuitDAE(circuit)
     y0, _ = consistent_state(dae, 0.0, dae.initial_state(0.0))
@@ -441,7 +441,7 @@ def main(argv=None):
 
 
 def run_pneunet_reference(n):
-    from pneunet.simulate import transient
+    from pneunet.engine.simulate import transient
 
     sol = transient(build(n, 1e-9, 1e-9), T_STOP)
     acts = np.column_stack([sol.pressure(a) for a in actuators(n)])

@@ -69,7 +69,7 @@ def median_time(run, repeats):
 
 # -- pneunet --------------------------------------------------------------------------------
 def pneunet_in_process(netlist, t_step, t_stop, nodes, repeats):
-    from pneunet.simulate import transient
+    from pneunet.engine.simulate import transient
 
     circuit = circuit_of(netlist)
     transient(circuit, t_stop, t_step=t_step)  # warm-up (first-call imports)
@@ -80,7 +80,7 @@ def pneunet_in_process(netlist, t_step, t_stop, nodes, repeats):
 
 
 def pneunet_reference(netlist, t_step, t_stop, nodes):
-    from pneunet.simulate import transient
+    from pneunet.engine.simulate import transient
 
     sol = transient(circuit_of(netlist, rtol=1e-9, atol=1e-9), t_stop, t_step=t_step)
     return sol.t, np.column_stack([sol.pressure(x) for x in nodes])

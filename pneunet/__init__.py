@@ -12,11 +12,11 @@ import importlib
 __version__ = "0.1.0"
 
 _LAZY = {
-    "Circuit": "pneunet.circuit",
-    "SimulationOptions": "pneunet.options",
-    "transient": "pneunet.simulate",
-    "operating_point": "pneunet.simulate",
-    "Solution": "pneunet.solution",
+    "Circuit": "pneunet.engine.circuit",
+    "SimulationOptions": "pneunet.engine.options",
+    "transient": "pneunet.engine.simulate",
+    "operating_point": "pneunet.engine.simulate",
+    "Solution": "pneunet.engine.solution",
     "ValveParams": "pneunet.valve_params",
     "PAPER_VALVES": "pneunet.valve_params",
     "waveforms": "pneunet.waveforms",

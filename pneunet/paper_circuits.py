@@ -4,7 +4,7 @@ All pressures absolute, kPa; resistances kPa·s/mg; volumes mL.
 """
 from __future__ import annotations
 
-from .circuit import Circuit
+from .engine.circuit import Circuit
 from .valve_params import PAPER_VALVES, ValveParams
 from .waveforms import Pulse
 

@@ -8,8 +8,8 @@ import pytest
 
 from pneunet import Circuit
 from pneunet.paper_circuits import oscillator
-from pneunet.simulate import transient
-from pneunet.solvers import available_backends
+from pneunet.engine.simulate import transient
+from pneunet.engine.solvers import available_backends
 
 needs_odes = pytest.mark.skipif("odes" not in available_backends(),
                                 reason="scikits.odes not installed (.ci/install-odes.sh)")

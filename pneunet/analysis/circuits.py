@@ -5,7 +5,7 @@ pressure p_c drives the valve's control port; the tank vents to p_L through R_ve
 """
 from __future__ import annotations
 
-from ..circuit import Circuit
+from ..engine.circuit import Circuit
 
 #: the paper's oscillator (section 6.2); R_out = 2 R_f of the axi valve
 OSCILLATOR_DEFAULTS = {"pH": 496.0, "pL": 96.0, "Rout": 1.132, "Rvent": 3.0, "V": 200.0,

@@ -59,7 +59,7 @@ def simulated_fill_time(volume_ml: float, R: float | None, p_supply: float, p_fr
     """Fill time from a transient: supply → resistor R (or a valve with its control port
     at ambient, fully open) → volume starting at ``p_from``; time to reach ``p_to``."""
     from .. import measure
-    from ..circuit import Circuit
+    from ..engine.circuit import Circuit
 
     c = Circuit("fill", ambient=ambient, **options)
     c.pressure_source("PS", "supply", p_supply)
@@ -82,7 +82,7 @@ def simulated_empty_time(volume_ml: float, R: float, p_low: float, p_from: float
                          ambient: float = 96.0, **options) -> float:
     """Empty time from a transient: volume at ``p_from`` → R → ``p_low``."""
     from .. import measure
-    from ..circuit import Circuit
+    from ..engine.circuit import Circuit
 
     c = Circuit("empty", ambient=ambient, **options)
     c.pressure_source("PL", "low", p_low)
@@ -140,7 +140,7 @@ def valve_comparison(p_in: float = 596.0, p_out: float = 296.0, fill=None):
 
 def plot_fill(volume_ml, R, p_supply, p_from, p_to, path=None, valve=None, ambient=96.0):
     """Analytic and simulated filling curves p(t)."""
-    from ..circuit import Circuit
+    from ..engine.circuit import Circuit
     from ..plotting import pyplot, save
 
     plt = pyplot()

@@ -33,7 +33,7 @@ def main(args) -> int:
     from ..errors import SolverError
     from ..netlist import parse_file
     from ..netlist.runner import RunResult, evaluate_measures, measure_unit, run_analysis
-    from ..solution import write_csv
+    from ..engine.solution import write_csv
 
     path = Path(args.netlist)
     deck = parse_file(path)

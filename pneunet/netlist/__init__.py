@@ -6,7 +6,7 @@
     for analysis in deck.analyses: ...
 
 Pipeline: text --(lark, grammar.lark)--> statements with spans --(elaborate)-->
-:class:`Deck` (a :class:`~pneunet.circuit.Circuit` plus analyses, measurements,
+:class:`Deck` (a :class:`~pneunet.engine.circuit.Circuit` plus analyses, measurements,
 saves and steps).  :func:`print_circuit` writes a circuit back as netlist text.
 """
 from __future__ import annotations

@@ -82,7 +82,7 @@ class Measure:
 class Deck:
     """A netlist after elaboration.
 
-    ``circuit`` is the (flattened) :class:`~pneunet.circuit.Circuit`; ``analyses``
+    ``circuit`` is the (flattened) :class:`~pneunet.engine.circuit.Circuit`; ``analyses``
     the analyses in file order; ``measures`` the ``.meas`` statements; ``saves``
     the signals to write (empty: all); ``steps`` the ``.step`` sweeps (nested,
     first outermost).  :meth:`variant` rebuilds the deck with parameter values

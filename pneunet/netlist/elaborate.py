@@ -158,7 +158,7 @@ class _Builder:
 
     # ---- top level
     def build(self) -> Deck:
-        from ..circuit import Circuit
+        from ..engine.circuit import Circuit
 
         top = self.source.top
         for st in top:
@@ -210,7 +210,7 @@ class _Builder:
         return deck
 
     def _options(self, statements):
-        from ..options import SimulationOptions
+        from ..engine.options import SimulationOptions
 
         values, opts = {}, SimulationOptions()
         for st in statements:

@@ -10,7 +10,7 @@ import math
 from dataclasses import fields, is_dataclass
 
 from .. import elements
-from ..options import SimulationOptions
+from ..engine.options import SimulationOptions
 from ..valve_params import PAPER_VALVES, ValveParams
 from ..waveforms import Waveform
 

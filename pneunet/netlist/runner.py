@@ -26,7 +26,7 @@ class DCResult:
     def table(self, select=None) -> dict[str, np.ndarray]:
         """Columns: the swept source's values, then one per signal named with its unit
         (with ``select``, only those whose name it accepts)."""
-        from ..solution import column_name
+        from ..engine.solution import column_name
 
         data = {f"{self.source}_{self.units.get('_sweep', '')}".rstrip("_"): self.values}
         data.update({name: v for name, v in ((column_name(k, self.units[k]), v)
@@ -99,7 +99,7 @@ def _dc(circuit, analysis: DC) -> DCResult:
 
 def _arrays(result, signal):
     """(x, y) arrays of a signal in a transient or dc result."""
-    from ..solution import Solution
+    from ..engine.solution import Solution
 
     if isinstance(result, Solution):
         return result.t, result[signal.key]

@@ -25,8 +25,8 @@ def _importers(prefix):
 
 @pytest.mark.parametrize("library, allowed", [
     ("matplotlib", {"plotting.py"}),
-    ("sksundae", {"solvers/sundae.py"}),
-    ("scikits", {"solvers/odes.py"}),
+    ("sksundae", {"engine/solvers/sundae.py"}),
+    ("scikits", {"engine/solvers/odes.py"}),
 ])
 def test_heavy_library_is_imported_by_one_module(library, allowed):
     assert _importers(library) <= allowed

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from pneunet import Circuit, ParameterError
-from pneunet.assembly import CircuitDAE
+from pneunet.engine.assembly import CircuitDAE
 from pneunet.elements import known_kinds
 from pneunet.waveforms import Step
 

@@ -4,7 +4,7 @@ import pytest
 
 from pneunet import Circuit
 from pneunet.laws import quadrature_flow
-from pneunet.solution import LazySignals
+from pneunet.engine.solution import LazySignals
 from pneunet.waveforms import Pulse
 
 

@@ -3,7 +3,7 @@
 ``transient`` integrates the circuit's DAE with SUNDIALS IDA from a consistent
 initial state, stepping onto every source breakpoint, restarting after source
 jumps, and crossing folds of relaxation oscillations by explicit jumps (see
-:mod:`pneunet.solvers.folds`) unless dead volumes make every node differential.
+:mod:`pneunet.engine.solvers.folds`) unless dead volumes make every node differential.
 """
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ import time as _time
 import numpy as np
 
 from .assembly import CircuitDAE
-from .errors import SolverError
+from ..errors import SolverError
 from .solution import LazySignals, OperatingPoint, Solution
 from .solvers import available_backends
 from .solvers.base import EVENT, FAILED, Segment
@@ -89,8 +89,9 @@ def transient(circuit, t_stop: float, *, t_step: float | None = None, t_start: f
     The integrator runs segment by segment between source breakpoints and branch
     jumps (restarted only after a jump), storing its internal steps; outputs on the
     ``t_step`` grid are cubic Hermite interpolants of them
-    (:mod:`pneunet.solvers.interpolate`), so the grid does not set the step size.  Circuits above ``STEP_STORE_LIMIT`` unknowns let
-    IDA interpolate onto the grid itself, so that memory follows the outputs.
+    (:mod:`pneunet.engine.solvers.interpolate`), so the grid does not set the step
+    size.  Circuits above ``STEP_STORE_LIMIT`` unknowns let IDA interpolate onto
+    the grid itself, so that memory follows the outputs.
     """
     if not t_stop > t_start:
         raise SolverError(f"t_stop ({t_stop} s) must be after t_start ({t_start} s)")
@@ -258,7 +259,7 @@ class _Record:
 
 class _Watch:
     """The integrator's event function: it crosses zero downwards at a fold (see
-    :class:`~pneunet.solvers.folds.FoldMonitor`), where a pressure falls to
+    :class:`~pneunet.engine.solvers.folds.FoldMonitor`), where a pressure falls to
     VACUUM_KPA, or once 1000 steps in a row were shorter than ``tiny`` s — a
     stalled integration — so that IDA's step loop always returns."""
 

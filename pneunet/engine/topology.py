@@ -1,7 +1,7 @@
 """Graph checks that make a circuit simulable, with errors naming the culprits."""
 from __future__ import annotations
 
-from .errors import TopologyError
+from ..errors import TopologyError
 
 
 def _where(spec) -> str:
@@ -18,7 +18,7 @@ def check_topology(circuit) -> None:
       a volume (their pressures are undetermined);
     * ``.ic`` on a node that does not exist.
     """
-    from . import elements
+    from .. import elements
 
     if not circuit.elements:
         raise TopologyError("the circuit has no elements")

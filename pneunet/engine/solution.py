@@ -13,7 +13,7 @@ from typing import Any, Callable, Mapping
 
 import numpy as np
 
-from .errors import PneunetError
+from ..errors import PneunetError
 
 
 def column_name(signal: str, unit: str) -> str:
@@ -163,7 +163,7 @@ class Solution:
 
     def plot(self, path=None, signals=None):
         """Plot pressures (top) and flows (bottom); save a PNG when ``path`` is given."""
-        from .plotting import pyplot, save
+        from ..plotting import pyplot, save
 
         names = list(signals) if signals else list(self.signals)
         pressures = [n for n in names if self.units.get(n) == "kPa" and n.startswith("p_")]

@@ -21,11 +21,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import SolverError
+from ...errors import SolverError
 
 
 class FoldMonitor:
-    """Fold indicator and jump for one :class:`~pneunet.assembly.CircuitDAE`."""
+    """Fold indicator and jump for one :class:`~pneunet.engine.assembly.CircuitDAE`."""
 
     def __init__(self, dae, threshold: float):
         from scipy.sparse import coo_matrix

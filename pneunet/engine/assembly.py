@@ -17,8 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import elements
-from .elements.base import ElementSpec, FamilyContext
+from .. import elements
+from ..elements.base import ElementSpec, FamilyContext
 
 
 @dataclass

@@ -21,12 +21,12 @@ from typing import Any
 
 import numpy as np
 
-from . import elements
-from .errors import ParameterError, SourceSpan, TopologyError
-from .elements.base import ElementSpec
+from .. import elements
+from ..errors import ParameterError, SourceSpan, TopologyError
+from ..elements.base import ElementSpec
 from .options import SimulationOptions
-from .units import split_quantity, to_internal
-from .waveforms import Waveform, as_waveform
+from ..units import split_quantity, to_internal
+from ..waveforms import Waveform, as_waveform
 
 REFERENCE_NODES = ("0", "gnd", "atm")
 
@@ -178,13 +178,13 @@ class Circuit:
 
     # -- analyses -------------------------------------------------------------------
     def tran(self, t_stop: float, **kwargs):
-        """Transient analysis; see :func:`pneunet.simulate.transient`."""
+        """Transient analysis; see :func:`pneunet.engine.simulate.transient`."""
         from .simulate import transient
 
         return transient(self, t_stop, **kwargs)
 
     def op(self, **kwargs):
-        """Operating point; see :func:`pneunet.simulate.operating_point`."""
+        """Operating point; see :func:`pneunet.engine.simulate.operating_point`."""
         from .simulate import operating_point
 
         return operating_point(self, **kwargs)

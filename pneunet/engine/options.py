@@ -3,9 +3,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass, fields, replace
 
-from .errors import ParameterError
-from .gas import AIR, GASES, ROOM_TEMPERATURE_K, STANDARD_ATMOSPHERE_KPA, Gas
-from .laws import DEFAULT_FLOW_BAND_KPA2
+from ..errors import ParameterError
+from ..gas import AIR, GASES, ROOM_TEMPERATURE_K, STANDARD_ATMOSPHERE_KPA, Gas
+from ..laws import DEFAULT_FLOW_BAND_KPA2
 
 
 @dataclass(frozen=True)

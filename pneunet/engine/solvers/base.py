@@ -1,6 +1,6 @@
 """What a transient backend provides: an integrator of F(t, y, ẏ) = 0 with events.
 
-The driver (:mod:`pneunet.simulate`) asks for *segments*: to the next stop (a
+The driver (:mod:`pneunet.engine.simulate`) asks for *segments*: to the next stop (a
 source breakpoint or the end), every internal step stored, ending early at a root
 of the event function or at a failure.  A segment restarts the integrator from a
 consistent state after a jump; across a corner where only a slope changes it
@@ -43,7 +43,7 @@ class Segment:
 
 
 class Integrator(ABC):
-    """Interface of a DAE integrator (see :mod:`pneunet.solvers.sundae`).
+    """Interface of a DAE integrator (see :mod:`pneunet.engine.solvers.sundae`).
 
     ``init(t, y, yp)`` (re)starts from a consistent state; ``step(target, tstop,
     onestep)`` advances to ``target`` (or one internal step), never past
