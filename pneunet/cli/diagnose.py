@@ -11,8 +11,9 @@ def register(subparsers):
         description="Fit the six-parameter valve model to static bench data, localise the "
                     "residuals, screen candidate physical effects under cross-validation "
                     "grouped by sweep, add those that clearly help, and report honestly "
-                    "(adequate / unexplained).")
-    p.add_argument("data", help="CSV in the format of DATA-FORMAT.md (sweep column optional)")
+                    "(adequate / explained / unexplained).")
+    p.add_argument("data", help="bench CSV: time_s, p_in_kPa, p_out_kPa, p_ctrl_kPa, "
+                                "mdot_mg_s (sweep optional; docs/identify.md)")
     p.add_argument("--effects", nargs="+", metavar="ID",
                    help="candidate effect ids (default: all registered effects)")
     p.add_argument("--plugin", action="append", default=[], metavar="MODULE",

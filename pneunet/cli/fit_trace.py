@@ -13,7 +13,7 @@ def register(subparsers) -> None:
         "fit-trace", help="fit a circuit to a recorded transient; find the physics it lacks",
         description="Least squares through the simulator: vary the named parameters of a "
                     "netlist (or the built-in oscillator) until the simulated signals match a "
-                    "recording in the DATA-FORMAT layout (time_s, p_<node>_kPa, "
+                    "recording (CSV columns time_s, p_<node>_kPa, "
                     "mdot_<element>_mg_s); every recorded column is compared (a few samples "
                     "around the jumps of an algebraic node are left out). With --candidates: "
                     "the noise floor from the data, every circuit effect (heat exchange in "

@@ -215,7 +215,7 @@ def diagnose(data, *, effects=None, n_splits=5, z=3.0, min_gain=0.02, max_effect
     Parameters
     ----------
     data : path, DataFrame or :class:`pneunet.identify.Measurements`
-        Static characterisation data (DATA-FORMAT.md); ``sweep`` optional.
+        Static characterisation data (docs/identify.md); ``sweep`` optional.
     effects : list of ids / Effect classes or instances, optional
         Candidate effects (default: every registered effect, user ones included).
     n_splits : int

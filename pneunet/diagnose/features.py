@@ -36,7 +36,7 @@ def prepare(frame: pd.DataFrame) -> tuple[pd.DataFrame, list[str]]:
     missing = [c for c in need if c not in frame]
     if missing:
         raise DataError(f"data lacks column(s) {', '.join(missing)}",
-                        hint="see shared/docs/DATA-FORMAT.md")
+                        hint="the bench CSV layout is in docs/identify.md, section 1")
     df = frame.reset_index(drop=True).copy()
     notes = []
     if "time_s" not in df:

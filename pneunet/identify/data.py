@@ -1,4 +1,4 @@
-"""Read and check static valve measurements (shared/docs/DATA-FORMAT.md).
+"""Read and check static valve measurements (the CSV layout of docs/identify.md).
 
 :func:`load_measurements` accepts the canonical CSV (or a DataFrame), maps other
 column names, converts other units (bar, psi, L/min normal ...) and gauge
@@ -111,7 +111,7 @@ def load_measurements(path_or_df, *, ambient_kpa=None, gauge=False, units=None, 
     Parameters
     ----------
     path_or_df : str, Path or DataFrame
-        A CSV file in the format of DATA-FORMAT.md or a DataFrame.
+        A CSV file (layout: docs/identify.md, section 1) or a DataFrame.
     ambient_kpa : float
         Barometric pressure (kPa); required with ``gauge=True`` (paper: 96 kPa).
     gauge : bool

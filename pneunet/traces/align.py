@@ -85,9 +85,14 @@ class Alignment:
         return Alignment(self.signal, self.level, self.starts[self.starts <= t1], self.margin)
 
     def model_times(self, times, sim_t, sim_y) -> np.ndarray:
-        """Simulation times compared with the recorded ``times`` (see the module doc)."""
+        """Simulation times compared with the recorded ``times`` (see the module doc).
+
+        The simulation's crossings are found as the recording's are, from its values
+        at the recorded times, so the sampling's own bias cancels."""
+        from .model import sample_at
+
         times = np.asarray(times, float)
-        sim_starts = crossings(sim_t, sim_y, self.level)
+        sim_starts = recorded_crossings(times, sample_at(sim_t, sim_y, times), self.level)
         n = min(len(sim_starts), len(self.starts))
         if n == 0:
             return times

@@ -1,4 +1,4 @@
-"""Recorded circuit transients (DATA-FORMAT, "Transient circuit recordings"): reading
+"""Recorded circuit transients (time_s, p_<node>_kPa, mdot_<element>_mg_s): reading
 with checks that name the file, the column and what to do; which samples are compared
 (jumping signals); the split into fitted and held-out cycles."""
 from __future__ import annotations

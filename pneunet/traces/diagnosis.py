@@ -5,10 +5,10 @@
    over the whole record (:mod:`pneunet.truth.noise`), per signal, pooled;
 3. locate the residual of the held-out cycles: which signal, which part of the cycle,
    and the time shift that best aligns model and recording there;
-4. screen every candidate effect (at its guess, the base parameters re-centred on the
-   recorded cycle: about two simulations, candidates in parallel), fit the most
-   promising ones fully (warm-started there), rank all by their error on the later,
-   held-out cycles;
+4. screen every candidate effect on a grid across its parameter range, the base
+   parameters moved by one Gauss–Newton step each (one simulation per point, points
+   in parallel), fit the most promising ones fully (warm-started at their best point),
+   rank all by their error on the later, held-out cycles;
 5. the verdict (:func:`pneunet.truth.verdict.decide`): ``adequate`` (base model at
    the floor), ``explained`` (the best effect, or it plus the next, brings the held-out
    error within ``tolerance`` × floor) or ``unexplained`` (and where it sits).
@@ -23,7 +23,7 @@ import numpy as np
 
 from ..truth.locate import best_lag, hot_phases, phase_profile
 from ..truth.noise import difference_sigma, segments
-from ..truth.verdict import TOLERANCE, Step, decide
+from ..truth.verdict import TOLERANCE, Step, at_floor, decide
 from ..truth.waterfall import Waterfall
 from .data import read_trace, signal_of_column, split_by_cycles
 from .effects import candidates_for
@@ -62,8 +62,8 @@ class TraceDiagnosis:
         f = self.final
         return {"verdict": self.verdict, "accepted": list(self.accepted),
                 "noise_floor": _num(self.noise_floor), "rms_unit": self.unit,
-                "ranking": self.ranking, "fit": self.base.as_dict(),
-                "final_fit": f.as_dict(), "waterfall": self.waterfall.to_json(),
+                "ranking": self.ranking, "fit": f.as_dict(),
+                "base_fit": self.base.as_dict(), "waterfall": self.waterfall.to_json(),
                 "where": list(self.where), "noise": self.noise,
                 "train_window": list(self.train_window), "test_window": list(self.test_window),
                 "timing": self.timing, "notes": list(self.notes)}
@@ -136,56 +136,91 @@ def locate(fit: TraceFit, test_window, floor: float, data_frame, node: str) -> l
 
 
 class _ScreenTask:
-    """One candidate's screen (picklable, runs in a worker): the effect at its guess,
-    the base parameters re-centred on the recorded cycle (two iterations of
-    :func:`~pneunet.traces.start.initial_values`), the fit-window residual there."""
+    """One screening point (picklable, runs in a worker): the effect at one point of its
+    grid, the base parameters re-centred by damped Gauss–Newton steps with the base
+    fit's Jacobian J (cycle alignment keeps the residual close to linear in them;
+    each step at most :data:`SCREEN_STEP` in ln value, halved when it does not help).
+    Its merit is the best fit-window residual reached, projected off J's columns,
+    ‖(I − J·J⁺)·r‖²."""
 
-    def __init__(self, effect, names, x_base, params, model_args, data):
-        self.effect, self.names, self.x_base = effect, names, x_base
-        self.params, self.model_args, self.data = params, model_args, data
+    def __init__(self, effect, point, names, x_base, jac, bounds, model_args, data):
+        self.effect, self.point, self.names, self.x_base = effect, point, names, x_base
+        self.jac, self.bounds, self.model_args, self.data = jac, bounds, model_args, data
 
     def __call__(self):
+        eff = self.effect
+        names = self.names + list(eff.params)
+        theta = np.log([self.point[k] for k in eff.params])
+        model = TraceModel(*self.model_args[0], effects=(eff,), **self.model_args[1])
+        fun = TraceResidual(model, names, *self.data)
+        xb, limit = self._recentred(model, names, theta), SCREEN_STEP
+        r = fun(np.concatenate([xb, theta]))
+        for _ in range(SCREEN_STEPS):
+            step = np.linalg.lstsq(self.jac, -r, rcond=None)[0]
+            step *= min(1.0, limit / max(np.max(np.abs(step)), 1e-300))
+            trial = np.clip(xb + step, *self.bounds)
+            r1 = fun(np.concatenate([trial, theta]))
+            if r1 @ r1 < r @ r:
+                xb, r = trial, r1
+            else:
+                limit /= 2
+        left = r - self.jac @ np.linalg.lstsq(self.jac, r, rcond=None)[0]
+        values = dict(zip(self.names, np.exp(xb)))
+        values.update(self.point)
+        return {"x": values, "rss": float(left @ left), "simulations": model.calls}
+
+
+    def _recentred(self, model, names, theta):
+        """The base parameters moved so the simulated cycle's turning points, rise
+        fraction and period match the recording (:func:`~pneunet.traces.start.
+        initial_values`, an oscillator it recognises; else unchanged): an effect that
+        changes the period much is judged after the period is matched."""
         from ..errors import PneunetError
         from .start import initial_values
 
-        eff = self.effect
-        names = self.names + list(eff.params)
-        x = np.concatenate([self.x_base, np.log([v[0] for v in eff.params.values()])])
-        lb = np.log([self.params[k][1] for k in self.names] + [v[1] for v in eff.params.values()])
-        ub = np.log([self.params[k][2] for k in self.names] + [v[2] for v in eff.params.values()])
-        model = TraceModel(*self.model_args[0], effects=(eff,), **self.model_args[1])
-        fun = TraceResidual(model, names, *self.data)
         times, sigs, meas = self.data[0], self.data[1], self.data[2]
-        node_sig = next((s for s in sigs if s.startswith("p_")), sigs[0])
+        node = next((s for s in sigs if s.startswith("p_")), None)
+        if node is None:
+            return self.x_base
+        x = np.concatenate([self.x_base, theta])
+        lb = np.concatenate([self.bounds[0], theta])
+        ub = np.concatenate([self.bounds[1], theta])
         try:
-            x, info = initial_values(model, names, x, lb, ub, times, meas[node_sig],
-                                     node_sig[2:], iterations=2)
+            x, info = initial_values(model, names, x, lb, ub, times, meas[node], node[2:],
+                                     iterations=2)
         except PneunetError:
-            pass
-        r = fun(np.clip(x, lb, ub))
-        return {"x": dict(zip(names, np.exp(x))), "rss": float(r @ r),
-                "failed": bool(fun.failures), "simulations": model.calls}
+            return self.x_base
+        return x[:len(self.x_base)] if info.get("method") != "none" else self.x_base
+
+
+#: largest change of a base parameter (ln value) in one screening step, and the steps
+SCREEN_STEP = 0.25
+SCREEN_STEPS = 2
 
 
 def _run_task(task):
     return task()
 
 
-def _screen(cand, names, x_base, params, model_args, data, pool):
-    """Screen rows (effect, rss at the re-centred guess, start values), best first."""
-    tasks = [_ScreenTask(e, names, x_base, params, model_args, data) for e in cand]
-    if pool is None:
-        outs = [t() for t in tasks]
-    else:
-        outs = list(pool.map(_run_task, tasks))
-    rows = [dict(o, effect=e) for e, o in zip(cand, outs)]
-    rows.sort(key=lambda r: (r["failed"], r["rss"]))
+def _screen(cand, names, x_base, jac, params, model_args, data, pool):
+    """Screen rows, best first: per candidate its best grid point (values with the base
+    parameters re-centred, rss after that)."""
+    bounds = (np.log([params[k][1] for k in names]), np.log([params[k][2] for k in names]))
+    tasks = [_ScreenTask(e, p, names, x_base, jac, bounds, model_args, data)
+             for e in cand for p in e.grid()]
+    outs = [t() for t in tasks] if pool is None else list(pool.map(_run_task, tasks))
+    rows = []
+    for e in cand:
+        mine = [o for t, o in zip(tasks, outs) if t.effect is e]
+        best = min(mine, key=lambda o: o["rss"])
+        rows.append(dict(best, effect=e, simulations=sum(o["simulations"] for o in mine)))
+    rows.sort(key=lambda r: r["rss"])
     return rows
 
 
 def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, signals=None,
                    node: str = "tank", effects=None, train_fraction: float = 0.5,
-                   max_nfev: int = 30, screen: int = 3, tolerance: float = TOLERANCE,
+                   max_nfev: int = 30, screen: int = 2, tolerance: float = TOLERANCE,
                    workers: int | None = None, options: dict | None = None,
                    progress=None) -> TraceDiagnosis:
     """Diagnose a circuit recording; see the module docstring.
@@ -193,7 +228,9 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
     ``build``/``params``/``fixed``/``signals``/``node`` as in
     :func:`~pneunet.traces.fit.fit_trace`; ``effects``: candidate effects (kinds,
     bound effects or their names; default every registered one at every site);
-    ``screen``: how many screened candidates are fitted fully; ``workers``: processes
+    ``screen``: how many of the best screened candidates are then fitted fully
+    (2 × ``max_nfev``: they have more parameters and start further away);
+    ``workers``: processes
     for parallel finite differences (None: 2 where there are 2 cores); ``progress``:
     a callable taking a message (e.g. ``print`` to stderr)."""
     from .model import process_pool
@@ -230,24 +267,28 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
             x_hat = np.log([base.values[k] for k in names])
             data_fit = _fit_data(df, train, base)
             n_res = sum(int(v.sum()) for v in data_fit[3].values())
-            rows = _screen(cand, names, x_hat, params, ((build, fixed), {"options": options}),
+            typical = base.wall_time_s / max(base.nfev, 1)
+            rows = _screen(cand, names, x_hat, base.extras["jacobian"], params,
+                           ((build, fixed), {"options": options, "typical_s": typical}),
                            data_fit, pool)
             timing["screen_s"] = time.perf_counter() - t0
             timing["screen_simulations"] = sum(r["simulations"] for r in rows)
             t0 = time.perf_counter()
-            for row in rows[:screen]:
+            for row in rows[:screen]:  # best first; stop at one that reaches the floor
                 eff = row["effect"]
                 say(f"fitting {eff.name}")
                 fits[eff.name] = _fit_effects(build, df, params, fixed, node, train, (eff,),
-                                              base, [row], max_nfev, pool, options, where)
+                                              base, [row], 2 * max_nfev, pool, options, where)
+                if at_floor(fits[eff.name].error(test), floor, tolerance):
+                    break
             timing["candidate_fits_s"] = time.perf_counter() - t0
             fitted = sorted((n for n in fits if n != "none"), key=lambda n: fits[n].error(test))
             ranking += [_row(n, fits[n], test, floor) for n in fitted]
             ranking += [{"effect": r["effect"].name, "held_out_rms": None, "fitted": False,
                          "screen_rms": math.sqrt(r["rss"] / n_res),
-                         "note": "screened out: at its guess, with the base parameters "
-                                 "re-centred on the cycle, it fits worse than the ones fitted"}
-                        for r in rows[screen:]]
+                         "note": "not fitted: across its parameter range it fits the first "
+                                 "cycles worse than the ones fitted fully"}
+                        for r in rows if r["effect"].name not in fits]
             ranking.sort(key=lambda r: (r["held_out_rms"] is None, r["held_out_rms"] or 0))
             if fitted:
                 best = fitted[0]

@@ -24,6 +24,8 @@ import copy
 from ..errors import ParameterError
 
 STORAGE_KINDS = ("volume", "actuator", "thermal_volume")
+#: screening grid points per parameter, for effects with 1, 2 (or more) parameters
+GRID_POINTS = (5, 3, 2)
 #: a tube at a port of these is a dead volume inside a series resistance: the same
 #: physics as a dead volume at a node plus a refitted resistance, so not offered there
 SERIES_KINDS = ("resistor", "pipe")
@@ -33,8 +35,9 @@ class CircuitEffect:
     """Base class of circuit effects.
 
     Set ``name`` (unique id), ``family`` (the physics) and ``form`` (which published
-    form), ``description``, ``params`` {name: (guess, low, high)} with the guess a typical
-    amount of the effect (the screen starts there), and implement
+    form), ``description``, ``params`` {name: (guess, low, high)} with (low, high) the
+    physically plausible range (the screen tries points across it, :meth:`grid`), and
+    implement
     :meth:`apply`.  Override :meth:`candidates` when the effect acts at sites.
     """
 
@@ -47,6 +50,19 @@ class CircuitEffect:
     def candidates(self, circuit) -> list["CircuitEffect"]:
         """The bound effects this kind offers for ``circuit`` (default: itself)."""
         return [self]
+
+    def grid(self) -> list[dict]:
+        """Parameter points the screen tries: per parameter :data:`GRID_POINTS` values
+        log-spaced inside (low, high) (at 1/2n, 3/2n … of the log range), all
+        combinations."""
+        import itertools
+
+        import numpy as np
+
+        n = GRID_POINTS[min(len(self.params), len(GRID_POINTS)) - 1] if self.params else 0
+        axes = [np.exp(np.log(lo) + (np.arange(n) + 0.5) / n * np.log(hi / lo))
+                for _, lo, hi in self.params.values()]
+        return [dict(zip(self.params, map(float, point))) for point in itertools.product(*axes)]
 
     def apply(self, circuit, values: dict) -> None:
         """Edit ``circuit`` in place with parameter ``values``."""
@@ -72,7 +88,7 @@ class PolytropicVolume(CircuitEffect):
     family = "heat exchange in volumes"
     form = "static polytropic exponent n (1 isothermal … 1.4 adiabatic)"
     description = "volumes exchange only part of their compression heat (p·V^n constant)"
-    params = {"n": (1.2, 1.0, 1.4)}
+    params = {"n": (1.02, 1.0, 1.67)}
 
     def candidates(self, circuit):
         return [self] if any(s.kind in ("volume", "actuator") for s in _storage(circuit)) else []
@@ -90,7 +106,7 @@ class VolumeHeatTransfer(CircuitEffect):
     family = "heat exchange in volumes"
     form = "gas energy balance with wall heat transfer, time constant τ (Simscape/Modelica)"
     description = "gas temperature in the volumes follows compression and relaxes to the wall"
-    params = {"tau": (0.3, 0.002, 50.0)}
+    params = {"tau": (0.01, 0.002, 50.0)}
 
     def candidates(self, circuit):
         return [self] if any(s.kind in ("volume", "actuator") for s in _storage(circuit)) else []
@@ -120,7 +136,7 @@ class DeadVolume(CircuitEffect):
     family = "dead volume"
     form = "isothermal volume V at a node"
     description = "gas volume at a node the netlist models without storage"
-    params = {"V_dead": (2.0, 0.01, 200.0)}
+    params = {"V_dead": (0.05, 0.005, 200.0)}
 
     def __init__(self, node: str | None = None):
         self.node = node
@@ -152,7 +168,7 @@ class Tube(CircuitEffect):
     family = "tube on a line"
     form = "quadrature resistance R then volume V at the element's port"
     description = "tubing between a node and the port it feeds (control lines included)"
-    params = {"R_tube": (0.1, 0.002, 10.0), "V_tube": (2.0, 0.01, 200.0)}
+    params = {"R_tube": (0.02, 0.002, 20.0), "V_tube": (0.05, 0.005, 200.0)}
 
     def __init__(self, element: str | None = None, port: str | None = None,
                  with_volume: bool = True):
@@ -167,13 +183,27 @@ class Tube(CircuitEffect):
     def candidates(self, circuit):
         from .. import elements
 
+        stored, pinned, attached = set(), set(), {}
+        for s in circuit.elements.values():
+            fam = elements.family(s.kind)
+            stored.update(s.nodes[p] for p in fam.storage_ports)
+            pinned.update(s.nodes[p] for p in fam.pinned_ports)
+            for node in s.nodes:
+                attached.setdefault(node, []).append(s.kind)
         out = []
         for s in circuit.elements.values():
             fam = elements.family(s.kind)
             if fam.pinned_ports or len(fam.ports) != len(s.nodes) or s.kind in SERIES_KINDS:
                 continue
             for k, port in enumerate(fam.ports):
-                if port == "heat":
+                node = s.nodes[k]
+                if port == "heat" or circuit.is_reference(node):
+                    continue
+                # a node where this element meets only series resistances: the tube is
+                # a dead volume there plus a refitted resistance
+                others = list(attached[node])
+                others.remove(s.kind)
+                if node not in stored | pinned and all(o in SERIES_KINDS for o in others):
                     continue
                 # a tube before a volume: its own volume merges with the vessel's
                 out.append(Tube(s.name, port, with_volume=k not in fam.storage_ports))

@@ -79,7 +79,7 @@ class TraceFit:
                 "sigma": self.sigma, "nfev": self.nfev, "success": self.success,
                 "message": self.message, "effects": [e.name for e in self.effects],
                 "wall_time_s": self.wall_time_s, "unit": self.unit,
-                **{k: v for k, v in self.extras.items() if k not in ("stage1", "alignment")}}
+                **{k: v for k, v in self.extras.items() if k not in ("stage1", "alignment", "jacobian")}}
 
     def report(self) -> str:
         lines = ["parameter        estimate      95 % CI"]
@@ -209,7 +209,7 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
                     res.message + (f"; {fun.failures} failed simulations" if fun.failures else ""),
                     tuple(effects), sol, time.perf_counter() - wall, unit, scales,
                     {"stage1": stage1, "simulations": nfev, "intervals": info,
-                     "alignment": aligned,
+                     "alignment": aligned, "jacobian": res.jac,
                      "compared": {s: int(keep_all[s].sum()) for s in sigs}})
 
 

@@ -18,24 +18,24 @@ from ..errors import PneunetError, SolverError
 #: simulator settings of the fit's simulations: the Jacobian is taken by forward
 #: differences with a step of :data:`DIFF_STEP` in ln value, so the simulator's own
 #: error (rtol 1e-6: < 0.005 kPa on sampled tank pressures of the oscillator) must be
-#: far below the response to a 0.5 % change (~0.5 kPa).  A 1e-4 mL dead volume at the
-#: algebraic nodes crosses the folds as fast transients: the explicit jumps land up to
-#: ~1 ms late or early at each fold (0.1–0.5 kPa in a 50 mL oscillator), a bias larger
-#: than a recording's parameter precision; the dead-volume limit agrees with a
-#: stand-alone integration to 0.03 kPa rms
-FIT_OPTIONS = {"rtol": 1e-6, "atol": 1e-6, "dead_volume": 1e-4}
+#: far below the response to a 0.5 % change (~0.5 kPa).  Folds are crossed by explicit
+#: jumps: aligned cycle by cycle (:mod:`.align`) they agree with a stand-alone
+#: integration in the dead-volume limit to 0.02 kPa rms; a 1e-4 mL dead volume
+#: instead agrees to 0.006 kPa but makes the fit's finite differences rough
+FIT_OPTIONS = {"rtol": 1e-6, "atol": 1e-6}
 DIFF_STEP = 5e-3
 
 
 class TraceModel:
-    """Simulate ``build(point)`` (+ effects) and sample its signals at given times."""
+    """Simulate ``build(point)`` (+ effects) and sample its signals at given times
+    (``typical_s``: a typical simulation's wall time, for the budget of the first)."""
 
     def __init__(self, build: Callable, fixed: dict | None = None, effects=(), start: str = "ic",
-                 options: dict | None = None):
+                 options: dict | None = None, typical_s: float | None = None):
         self.build, self.fixed, self.effects, self.start = build, dict(fixed or {}), tuple(effects), start
         self.options = dict(options or {})
         self.calls = 0
-        self._times = []
+        self._times = [] if typical_s is None else [float(typical_s)]
 
     def circuit(self, values: dict):
         from ..analysis.sweep import apply_overrides
@@ -44,10 +44,16 @@ class TraceModel:
         point.update({k: v for k, v in values.items() if not self._effect_param(k)})
         c = self.build(point)
         apply_overrides(c, point)
-        for eff in self.effects:
-            eff.apply(c, {k: values.get(k, eff.params[k][0]) for k in eff.params})
         if self.options:
             c.options = c.options.replace(**self.options)
+        settled = None
+        if self.start == "ic" and (self.effects or c.options.dead_volume > 0):
+            settled = settled_pressures(c)
+        old_nodes = set(c.nodes)
+        for eff in self.effects:
+            eff.apply(c, {k: values.get(k, eff.params[k][0]) for k in eff.params})
+        if settled is not None:
+            start_settled(c, settled, old_nodes)
         return c
 
     def _effect_param(self, name):
@@ -79,6 +85,40 @@ class TraceModel:
         sol = self.simulate(values, t_end, dt)
         at = times if align is None else align.model_times(times, sol.t, sol[align.signal])
         return {s: sample_at(sol.t, sol[s], at) for s in signals}, sol
+
+
+def settled_pressures(circuit) -> dict:
+    """({node: pressure}, algebraic nodes) of the circuit's consistent state at t = 0
+    without dead volumes (the algebraic nodes solved for the initial storage
+    pressures), kPa."""
+    from ..engine.assembly import CircuitDAE
+    from ..engine.simulate import consistent_state
+
+    options = circuit.options
+    circuit.options = options.replace(dead_volume=0.0)
+    try:
+        dae = CircuitDAE(circuit)
+        y, _ = consistent_state(dae, 0.0, dae.initial_state(0.0))
+    finally:
+        circuit.options = options
+    return (dict(zip(dae.node_names, map(float, y))),
+            {dae.node_names[i] for i in dae.algebraic_idx})
+
+
+def start_settled(circuit, settled, old_nodes) -> None:
+    """Start the storage that effects or ``.options dead_volume`` put on algebraic nodes
+    where the circuit had those nodes (``.ic``), and a new node that a resistance joins
+    to such a node (a tube's inner node) at that node's pressure: a recording starts
+    from a settled state, not from a volume at the ambient pressure."""
+    settled, algebraic = settled
+    for node in algebraic:
+        circuit.initial.setdefault(node, settled[node])
+    for spec in circuit.elements.values():
+        if spec.kind in ("resistor", "pipe") and len(spec.nodes) == 2:
+            a, b = spec.nodes
+            for new, old in ((a, b), (b, a)):
+                if new not in old_nodes and old in settled:
+                    circuit.initial.setdefault(new, settled[old])
 
 
 #: a simulation may take this many times the median one before it counts as failed
@@ -170,7 +210,8 @@ def synthetic_trace(build: Callable, params: dict, t_end: float, *, dt: float = 
                     signals=("p_tank", "p_out"), noise: float = 0.5, seed: int = 0,
                     options: dict | None = None):
     """A recording simulated by pneunet with known ``params`` plus white noise (kPa /
-    mg/s), in the DATA-FORMAT layout (rtol 1e-7 unless ``options``)."""
+    mg/s), columns time_s, p_<node>_kPa, mdot_<element>_mg_s (rtol 1e-7 unless
+    ``options``)."""
     import pandas as pd
 
     from ..analysis.sweep import apply_overrides

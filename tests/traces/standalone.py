@@ -56,6 +56,7 @@ DEFAULTS = {"Rout": 1.132, "Rvent": 3.0, "V": 50.0, "pH": 496.0, "pL": 96.0, "V_
             "heat_tau": None,        # energy balance, constant hA = m(200 kPa)·c_v/τ
             "tube_ctrl": None,       # (R, V): tube from the tank to the control port
             "tube_supply": None,     # (R, V): tube from the supply to the valve input
+            "side": None,            # (R, V): a dead-end volume joined to the tank by R
             "creep": None,           # kPa/s: p_close drifts (membrane creep)
             "ripple": None,          # (amplitude kPa, frequency Hz) on the supply
             }
@@ -79,6 +80,9 @@ def oscillator_record(t_end=12.0, dt=0.05, noise=0.4, seed=0, signals=("tank", "
         n += 1
     if p["tube_supply"] is not None:
         idx["in"] = n
+        n += 1
+    if p["side"] is not None:
+        idx["side"] = n
         n += 1
     m_ref_over_tau = (capacitance(p["V"]) * 200.0 / p["heat_tau"]) if p["heat_tau"] else 0.0
 
@@ -127,6 +131,11 @@ def oscillator_record(t_end=12.0, dt=0.05, noise=0.4, seed=0, signals=("tank", "
                 dy[1] -= q / C_tank
             else:
                 raise NotImplementedError("one hidden effect at a time with heat exchange")
+        if "side" in idx:
+            R, V = p["side"]
+            q = resistor(p_tank, y[idx["side"]], R)
+            dy[idx["side"]] = q / capacitance(V)
+            dy[1] -= q / C_tank
         if "in" in idx:
             R, V = p["tube_supply"]
             dy[idx["in"]] = (resistor(supply(t), p_in, R) - q_valve) / capacitance(V)
@@ -143,6 +152,8 @@ def oscillator_record(t_end=12.0, dt=0.05, noise=0.4, seed=0, signals=("tank", "
         y0[idx["ctrl"]] = p["pL"]
     if "in" in idx:
         y0[idx["in"]] = p["pH"]
+    if "side" in idx:
+        y0[idx["side"]] = p["pL"]
     times = np.arange(0.0, t_end + 1e-9, dt)
     sol = solve_ivp(rhs, (0.0, times[-1]), y0, method="Radau", t_eval=times, rtol=1e-8,
                     atol=1e-8)
