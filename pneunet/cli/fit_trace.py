@@ -42,9 +42,10 @@ def register(subparsers) -> None:
                         "registers your own circuit effects")
     p.add_argument("--train-fraction", type=float, default=0.5,
                    help="fraction of the cycles used for fitting with --candidates (0.5)")
-    p.add_argument("--max-nfev", type=int, default=30,
+    p.add_argument("--max-nfev", type=int, default=40,
                    help="simulation budget of each fit's least-squares stage, Jacobian "
-                        "included (30)")
+                        "included (40; a candidate effect's fit gets 4x: raise it when the "
+                        "best candidate's fit stops short of the noise floor)")
     p.add_argument("--workers", type=int, default=None,
                    help="processes for parallel finite differences (default: 2 if 2 cores)")
     p.add_argument("--plot", metavar="PNG", default=None, help="fit and residual plot")

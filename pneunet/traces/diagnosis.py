@@ -128,10 +128,15 @@ def locate(fit: TraceFit, test_window, floor: float, data_frame, node: str) -> l
         keep = sel & np.isfinite(r[s].to_numpy())
         lag = best_lag(t, meas, model, 0.1 * period, keep)
         where = ", ".join(f"{a:.2f}–{b:.2f}" for a, b in hot) or "spread over the cycle"
-        lead = ("the recording lags the model" if lag > 0 else "the recording leads the model")
+        dt = float(np.median(np.diff(t)))
+        if abs(lag) < 0.5 * dt:
+            shift = "no time shift brings them together there (a shape error)"
+        else:
+            shift = (f"the recording {'lags' if lag > 0 else 'leads'} the model by "
+                     f"{abs(lag):.3g} s there")
         findings.append(f"{s}: held-out rms {rms:.3g} {fit.unit} ({rms / floor:.1f}× the noise "
                         f"floor), largest at cycle phase {where} (0 = rising through mid-range "
-                        f"of p_{node}); {lead} by {abs(lag):.3g} s there")
+                        f"of p_{node}); {shift}")
     return findings
 
 
@@ -220,7 +225,7 @@ def _screen(cand, names, x_base, jac, params, model_args, data, pool):
 
 def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, signals=None,
                    node: str = "tank", effects=None, train_fraction: float = 0.5,
-                   max_nfev: int = 30, screen: int = 2, tolerance: float = TOLERANCE,
+                   max_nfev: int = 40, screen: int = 2, tolerance: float = TOLERANCE,
                    workers: int | None = None, options: dict | None = None,
                    progress=None) -> TraceDiagnosis:
     """Diagnose a circuit recording; see the module docstring.
@@ -229,7 +234,7 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
     :func:`~pneunet.traces.fit.fit_trace`; ``effects``: candidate effects (kinds,
     bound effects or their names; default every registered one at every site);
     ``screen``: how many of the best screened candidates are then fitted fully
-    (2 × ``max_nfev``: they have more parameters and start further away);
+    (4 × ``max_nfev``: they have more parameters and start further away);
     ``workers``: processes
     for parallel finite differences (None: 2 where there are 2 cores); ``progress``:
     a callable taking a message (e.g. ``print`` to stderr)."""
@@ -278,7 +283,7 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
                 eff = row["effect"]
                 say(f"fitting {eff.name}")
                 fits[eff.name] = _fit_effects(build, df, params, fixed, node, train, (eff,),
-                                              base, [row], 2 * max_nfev, pool, options, where)
+                                              base, [row], 4 * max_nfev, pool, options, where)
                 if at_floor(fits[eff.name].error(test), floor, tolerance):
                     break
             timing["candidate_fits_s"] = time.perf_counter() - t0

@@ -23,7 +23,6 @@ import copy
 
 from ..errors import ParameterError
 
-STORAGE_KINDS = ("volume", "actuator", "thermal_volume")
 #: screening grid points per parameter, for effects with 1, 2 (or more) parameters
 GRID_POINTS = (5, 3, 2)
 #: a tube at a port of these is a dead volume inside a series resistance: the same
@@ -77,8 +76,9 @@ class CircuitEffect:
         return f"{type(self).__name__}({self.name!r})"
 
 
-def _storage(circuit):
-    return [s for s in circuit.elements.values() if s.kind in STORAGE_KINDS]
+def _gas_volumes(circuit):
+    """The isothermal volumes and actuators of ``circuit`` (what heat exchange edits)."""
+    return [s for s in circuit.elements.values() if s.kind in ("volume", "actuator")]
 
 
 class PolytropicVolume(CircuitEffect):
@@ -91,12 +91,11 @@ class PolytropicVolume(CircuitEffect):
     params = {"n": (1.02, 1.0, 1.67)}
 
     def candidates(self, circuit):
-        return [self] if any(s.kind in ("volume", "actuator") for s in _storage(circuit)) else []
+        return [self] if _gas_volumes(circuit) else []
 
     def apply(self, circuit, values):
-        for spec in _storage(circuit):
-            if spec.kind in ("volume", "actuator"):
-                spec.params["n"] = float(values["n"])
+        for spec in _gas_volumes(circuit):
+            spec.params["n"] = float(values["n"])
 
 
 class VolumeHeatTransfer(CircuitEffect):
@@ -104,21 +103,17 @@ class VolumeHeatTransfer(CircuitEffect):
 
     name = "volume_heat_transfer"
     family = "heat exchange in volumes"
-    form = "gas energy balance with wall heat transfer, time constant τ (Simscape/Modelica)"
+    form = "gas energy balance with constant wall conductance hA = m_ref·c_v/τ (Simscape/Modelica)"
     description = "gas temperature in the volumes follows compression and relaxes to the wall"
     params = {"tau": (0.01, 0.002, 50.0)}
 
     def candidates(self, circuit):
-        return [self] if any(s.kind in ("volume", "actuator") for s in _storage(circuit)) else []
+        return [self] if _gas_volumes(circuit) else []
 
     def apply(self, circuit, values):
         import numpy as np
 
-        from ..elements import thermal  # noqa: F401  (registers thermal_volume)
-
-        for spec in list(_storage(circuit)):
-            if spec.kind not in ("volume", "actuator"):
-                continue
+        for spec in _gas_volumes(circuit):
             p = spec.params
             V = p["V"]
             if spec.kind == "actuator" and np.isnan(V):

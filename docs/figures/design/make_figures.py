@@ -1,7 +1,7 @@
 """Regenerate the figures of docs/design.md (except regime_map.png, written by the
 `pneunet sweep` command shown there).  Run from the repository root:
 
-    python docs/figures/design/make_figures.py [--skip-fit] [--skip-demux]
+    python docs/figures/design/make_figures.py [--skip-demux]
 """
 from __future__ import annotations
 
@@ -108,23 +108,9 @@ def logic(demux=True):
                          title="3-bit demultiplexer (netlists/demux3.pn): actuator pressures")
 
 
-def fit():
-    from pneunet.analysis.circuits import oscillator
-    from pneunet.analysis.fit_trace import fit_trace, plot_fit, synthetic_trace
-
-    data = synthetic_trace(oscillator, {"Rout": 1.132, "Rvent": 3.0, "V": 50.0}, 5.0, dt=0.025,
-                           noise=0.5, seed=1, signals=("p_tank",))
-    f = fit_trace(oscillator, data, {"Rout": (1.0, 0.2, 5), "Rvent": (3.4, 0.5, 20),
-                                     "V": (56, 5, 500)}, node="tank")
-    print(f.report(), f.extras)
-    plot_fit(f, data, OUT / "fit_trace.png")
-
-
 if __name__ == "__main__":
     branches()
     oscillation()
     fill()
     tolerance()
     logic(demux="--skip-demux" not in sys.argv)
-    if "--skip-fit" not in sys.argv:
-        fit()
