@@ -1,9 +1,9 @@
 """Results of analyses: immutable, labelled signals with units.
 
-Signal names follow the measured-data format (docs/DATA-FORMAT.md): ``p_<node>``
-for node pressures (kPa absolute), ``mdot_<element>`` for element flows (mg/s),
-plus element-specific signals (``dp_<valve>``, ``opening_<valve>``).  Table
-columns append the unit: ``p_tank_kPa``, ``mdot_Rout_mg_s``.
+Signal names follow the columns of recorded data (docs/diagnose.md, "Circuit
+recordings"): ``p_<node>`` for node pressures (kPa absolute), ``mdot_<element>`` for
+element flows (mg/s), plus element-specific signals (``dp_<valve>``,
+``opening_<valve>``).  Table columns append the unit: ``p_tank_kPa``, ``mdot_Rout_mg_s``.
 """
 from __future__ import annotations
 

@@ -59,6 +59,7 @@ def test_clean_recording_is_adequate_with_intervals_covering_the_truth():
         assert hi - lo < 0.05 * truth  # and they say something
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", list(LIBRARY))
 def test_library_effect_is_named_first_and_reaches_the_floor(name):
     kw, effect = LIBRARY[name]
@@ -76,6 +77,7 @@ def test_library_effect_is_named_first_and_reaches_the_floor(name):
     assert value == pytest.approx(1.5, rel=0.15)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", list(OUTSIDE))
 def test_physics_outside_the_library_is_unexplained(name):
     d = run(OUTSIDE[name])

@@ -33,6 +33,7 @@ def registered():
     unregister(SIDE.name)
 
 
+@pytest.mark.slow
 def test_registered_effect_is_a_candidate_and_is_found(registered):
     assert "side_volume" in [e.name for e in candidates_for(oscillator())]
     rec = oscillator_record(12.0, noise=0.4, seed=1, side=(2.0, 30.0))
