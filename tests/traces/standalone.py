@@ -71,19 +71,11 @@ def oscillator_record(t_end=12.0, dt=0.05, noise=0.4, seed=0, signals=("tank", "
     C_tank = capacitance(p["V"])
     # state: p_out, tank (p or mass), [T], [p_ctrl tube], [p_in tube]
     idx = {"out": 0, "tank": 1}
-    n = 2
-    if p["heat_tau"] is not None:
-        idx["T"] = n
-        n += 1
-    if p["tube_ctrl"] is not None:
-        idx["ctrl"] = n
-        n += 1
-    if p["tube_supply"] is not None:
-        idx["in"] = n
-        n += 1
-    if p["side"] is not None:
-        idx["side"] = n
-        n += 1
+    for key, state in (("heat_tau", "T"), ("tube_ctrl", "ctrl"), ("tube_supply", "in"),
+                       ("side", "side")):
+        if p[key] is not None:
+            idx[state] = len(idx)
+    n = len(idx)
     m_ref_over_tau = (capacitance(p["V"]) * 200.0 / p["heat_tau"]) if p["heat_tau"] else 0.0
 
     def tank_pressure(y):
