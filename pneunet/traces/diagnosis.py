@@ -142,11 +142,11 @@ def locate(fit: TraceFit, test_window, floor: float, data_frame, node: str) -> l
 
 class _ScreenTask:
     """One screening point (picklable, runs in a worker): the effect at one point of its
-    grid, the base parameters re-centred by damped Gauss–Newton steps with the base
-    fit's Jacobian J (cycle alignment keeps the residual close to linear in them;
-    each step at most :data:`SCREEN_STEP` in ln value, halved when it does not help).
-    Its merit is the best fit-window residual reached, projected off J's columns,
-    ‖(I − J·J⁺)·r‖²."""
+    grid, the base parameters re-centred on the recorded cycle, then moved by
+    :data:`SCREEN_STEPS` damped Gauss–Newton step(s) with the base fit's Jacobian J
+    (cycle alignment keeps the residual close to linear in them; each step at most
+    :data:`SCREEN_STEP` in ln value, halved when it does not help).  Its merit is the
+    best fit-window residual reached, projected off J's columns, ‖(I − J·J⁺)·r‖²."""
 
     def __init__(self, effect, point, names, x_base, jac, bounds, model_args, data):
         self.effect, self.point, self.names, self.x_base = effect, point, names, x_base
@@ -192,7 +192,7 @@ class _ScreenTask:
         ub = np.concatenate([self.bounds[1], theta])
         try:
             x, info = initial_values(model, names, x, lb, ub, times, meas[node], node[2:],
-                                     iterations=2)
+                                     iterations=1)
         except PneunetError:
             return self.x_base
         return x[:len(self.x_base)] if info.get("method") != "none" else self.x_base
@@ -200,7 +200,7 @@ class _ScreenTask:
 
 #: largest change of a base parameter (ln value) in one screening step, and the steps
 SCREEN_STEP = 0.25
-SCREEN_STEPS = 2
+SCREEN_STEPS = 1
 
 
 def _run_task(task):

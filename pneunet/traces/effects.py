@@ -103,7 +103,8 @@ class VolumeHeatTransfer(CircuitEffect):
 
     name = "volume_heat_transfer"
     family = "heat exchange in volumes"
-    form = "gas energy balance with constant wall conductance hA = m_ref·c_v/τ (Simscape/Modelica)"
+    form = ("gas energy balance with constant wall conductance hA = m_ref·c_v/τ "
+            "(Simscape/Modelica)")
     description = "gas temperature in the volumes follows compression and relaxes to the wall"
     params = {"tau": (0.01, 0.002, 50.0)}
 

@@ -79,7 +79,8 @@ class TraceFit:
                 "sigma": self.sigma, "nfev": self.nfev, "success": self.success,
                 "message": self.message, "effects": [e.name for e in self.effects],
                 "wall_time_s": self.wall_time_s, "unit": self.unit,
-                **{k: v for k, v in self.extras.items() if k not in ("stage1", "alignment", "jacobian")}}
+                **{k: v for k, v in self.extras.items()
+                   if k not in ("stage1", "alignment", "jacobian")}}
 
     def report(self) -> str:
         lines = ["parameter        estimate      95 % CI"]
