@@ -43,8 +43,8 @@ def main(argv=None) -> None:
     from pneunet.traces import diagnose_trace
     from tests.traces.standalone import oscillator_record
 
-    print(f"| case | expected | verdict | accepted | held-out / floor (base → final) | "
-          f"floor kPa | time s |")
+    print("| case | expected | verdict | accepted | held-out / floor (base → final) | "
+          "floor kPa | time s |")
     print("|---|---|---|---|---|---|---|")
     for name in args.cases:
         kw, expected = CASES[name]

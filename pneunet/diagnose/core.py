@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..effects import ValveModel, as_effect, available_effects
-from ..errors import DataError, ParameterError
+from ..errors import ParameterError
 from .features import FEATURE_LABELS, feature_table, noise_floor, prepare
 from .fitting import (ModelFit, cross_validate, fit_model, group_bootstrap_weights, group_folds,
                       initial_params, model_inputs, predict, rmse_ci, rmse_diff_ci)

@@ -27,11 +27,9 @@ LINE_HALF_WIDTH = 2
 def crossings(t, y, level) -> np.ndarray:
     """Times where ``y`` rises through ``level`` (linear between samples), those closer
     than 30 % of the median spacing to the previous one dropped (noise)."""
-    t, y = np.asarray(t, float), np.asarray(y, float)
-    d = y - level
-    idx = np.flatnonzero((d[:-1] < 0) & (d[1:] >= 0))
-    out = t[idx] + (t[idx + 1] - t[idx]) * (-d[idx]) / np.where(d[idx + 1] != d[idx],
-                                                                   d[idx + 1] - d[idx], 1.0)
+    from ..analysis.oscillation import _rising_crossings
+
+    out = _rising_crossings(np.asarray(t, float), np.asarray(y, float), level)
     if len(out) > 2:
         gap = 0.3 * float(np.median(np.diff(out)))
         keep = [0]

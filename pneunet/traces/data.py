@@ -86,11 +86,6 @@ def signal_of_column(col: str) -> str:
     return col
 
 
-def column_of_signal(signal: str) -> str:
-    """``p_tank`` → ``p_tank_kPa``, ``mdot_X1`` → ``mdot_X1_mg_s``."""
-    return f"{signal}_kPa" if signal.startswith("p_") else f"{signal}_mg_s"
-
-
 def jump_samples(y) -> np.ndarray:
     """Indices i where the recorded signal jumps between sample i and i+1."""
     d = np.abs(np.diff(np.asarray(y, float)))

@@ -20,6 +20,7 @@ parameters, :class:`NetlistEffect`) and :func:`register` it; see docs/diagnose.m
 from __future__ import annotations
 
 import copy
+from abc import ABC, abstractmethod
 
 from ..errors import ParameterError
 
@@ -30,7 +31,7 @@ GRID_POINTS = (5, 3, 2)
 SERIES_KINDS = ("resistor", "pipe")
 
 
-class CircuitEffect:
+class CircuitEffect(ABC):
     """Base class of circuit effects.
 
     Set ``name`` (unique id), ``family`` (the physics) and ``form`` (which published
@@ -63,9 +64,9 @@ class CircuitEffect:
                 for _, lo, hi in self.params.values()]
         return [dict(zip(self.params, map(float, point))) for point in itertools.product(*axes)]
 
+    @abstractmethod
     def apply(self, circuit, values: dict) -> None:
         """Edit ``circuit`` in place with parameter ``values``."""
-        raise NotImplementedError
 
     def to_json(self) -> dict:
         return {"effect": self.name, "family": self.family, "form": self.form,

@@ -21,7 +21,7 @@ def test_walkthrough_runs_and_names_the_user_effect(tmp_path, monkeypatch, capsy
         assert [w["feature"] for w in first.where][0] in ("p_ctrl", "dp")
         assert "control-area" in available_effects()
         assert second.accepted == ["control-area"]
-        assert second.verdict != "unexplained"
+        assert second.verdict == "explained"
         c = second.final.fit.effect_params()["control-area"]["c"]
         assert abs(c["value"] - 2.5e-4) < 0.15 * 2.5e-4
         assert second.final.cv_rmse < 0.75 * second.baseline.cv_rmse

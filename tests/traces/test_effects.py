@@ -1,0 +1,40 @@
+"""Circuit effects: every registered kind offers its sites on the oscillator, each bound
+effect changes the simulated circuit and keeps it simulatable, its screening grid lies
+inside its bounds, and an effect without ``apply`` cannot be made."""
+import numpy as np
+import pytest
+
+from pneunet.analysis.circuits import oscillator
+from pneunet.traces import CircuitEffect, candidates_for
+
+BASE = oscillator({"V": 50.0}).tran(3.0, t_step=0.05)
+
+
+@pytest.mark.parametrize("effect", candidates_for(oscillator()), ids=lambda e: e.name)
+def test_effect_changes_the_circuit_and_its_grid_is_inside_its_bounds(effect):
+    grid = effect.grid()
+    assert grid
+    for point in grid:
+        for k, v in point.items():
+            _, lo, hi = effect.params[k]
+            assert lo < v < hi
+    c = oscillator({"V": 50.0})
+    effect.apply(c, grid[len(grid) // 2])
+    sol = c.tran(3.0, t_step=0.05)
+    tank = np.interp(BASE.t, sol.t, sol["p_tank"])
+    assert np.max(np.abs(tank - BASE["p_tank"])) > 1.0  # kPa: the effect is visible
+
+
+def test_sites_cover_the_lines_where_a_tube_is_not_a_dead_volume():
+    names = {e.name for e in candidates_for(oscillator())}
+    assert {"polytropic_volume", "volume_heat_transfer", "dead_volume@out", "tube@X1.in",
+            "tube@X1.ctrl", "tube@V1.node"} <= names
+    assert "tube@X1.out" not in names and "tube@Rout.a" not in names
+
+
+def test_an_effect_without_apply_cannot_be_made():
+    class Nothing(CircuitEffect):
+        name = "nothing"
+
+    with pytest.raises(TypeError):
+        Nothing()
