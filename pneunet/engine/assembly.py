@@ -212,19 +212,28 @@ class CircuitDAE:
         """∂F/∂y + cj·∂F/∂ẏ as a scipy CSC matrix."""
         return self.csc(self.evaluate(t, y, ydot, cj)[1])
 
+    def mass_matrix(self, t, y):
+        """∂F/∂ẏ at (t, y) as a CSC matrix, mg/kPa."""
+        zeros = np.zeros(self.n)
+        stiff = self.evaluate(t, y, zeros, cj=0.0)[1].copy()
+        return self.csc(self.evaluate(t, y, zeros, cj=1.0)[1] - stiff)
+
     def capacitance(self, t, y) -> np.ndarray:
-        """∂F/∂ẏ on the diagonal: the capacitance (mg/kPa) at each unknown node."""
-        f0, _ = self.evaluate(t, y, np.zeros(self.n))
-        f1, _ = self.evaluate(t, y, np.ones(self.n))
-        return f1 - f0
+        """The diagonal of ∂F/∂ẏ: the capacitance (mg/kPa) at each unknown node."""
+        return self.mass_matrix(t, y).diagonal()
 
     def derivative(self, t, y) -> np.ndarray:
-        """ẏ consistent with y: ẏ_d = −F_d(ẏ=0)/C, ẏ_a = 0 (kPa/s)."""
+        """ẏ consistent with y: M_dd·ẏ_d = −F_d(ẏ=0), ẏ_a = 0 (kPa/s)."""
         f0, _ = self.evaluate(t, y, np.zeros(self.n))
-        c = self.capacitance(t, y)
+        d = np.flatnonzero(self.differential)
+        mass = self.mass_matrix(t, y)[d][:, d]
         ydot = np.zeros(self.n)
-        d = self.differential
-        ydot[d] = -f0[d] / c[d]
+        if mass.nnz == d.size:  # one storage term per node: divide
+            ydot[d] = -f0[d] / mass.diagonal()
+        else:
+            from scipy.sparse.linalg import spsolve
+
+            ydot[d] = -spsolve(mass.tocsc(), f0[d])
         return ydot
 
     # -- breakpoints and reporting --------------------------------------------------------
