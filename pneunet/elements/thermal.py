@@ -16,6 +16,11 @@ emptied through its one port; the gas entering carries the enthalpy of the circu
     mass     q = d/dt (p·V / (R·T))                                  [mg/s into the volume]
     energy   V·ṗ/(γ − 1) = c_p·T_up·q + m·c_v·(T_w − T)/τ,   T_up = T_w if q ≥ 0 else T
 
+This one-port form is exact when the volume has one line (an actuator at the end of its
+tube).  A vessel filled through one line while it empties through another (a tank
+between a valve and a vent) needs the enthalpy of each line on its own: use
+``thermal_chamber`` with one ``thermal_inlet`` per line (below).
+
 The gas temperature is a second unknown, carried at the element's second node (port
 ``heat``) as the pressure-like θ = p_ref·T/T_w (kPa; p_ref = p0, or ambient), so it
 starts at θ = p_ref (T = T_w) and the assembler treats it like any storage node.
@@ -113,3 +118,103 @@ class ThermalVolume(ElementFamily):
 
     def signals(self, t, p):
         return {"T": ("K", self._t_wall * p[..., 1] / self._p_ref)}
+
+
+@register
+class ThermalChamber(ThermalVolume):
+    """Rigid volume with gas energy balance, fed through ``thermal_inlet`` elements only.
+
+    Its gas node carries the chamber's energy balance and its ``heat`` node the mass
+    balance; each line reaches the chamber through a ``thermal_inlet`` that brings its
+    mass flow q_k and enthalpy c_p·T_up,k·q_k (T_up,k = T_w entering, T leaving):
+
+        gas node    C·ṗ/γ − H/γ − Σ_k (T_up,k/T_w)·q_k = 0        (energy / (c_p·T_w), mg/s)
+        heat node   Σ_k q_k − C·(p_ref/θ)·(ṗ − p·θ̇/θ) = 0           (mass, mg/s)
+
+    with C, H, θ and p_ref as for ``thermal_volume``.  This is the volume of Simscape
+    Gas and Modelica with any number of ports."""
+
+    kind = "thermal_chamber"
+    aliases = ()
+    description = ("rigid gas volume with energy balance and wall heat transfer, fed "
+                   "through thermal_inlet elements (one per line)")
+
+    def _balances(self, p, pdot):
+        """Energy storage E = (C·ṗ − H)/γ and mass storage M (mg/s), with pieces."""
+        u, w = p[..., 0], p[..., 1]
+        ud, wd = pdot[..., 0], pdot[..., 1]
+        c, tau, g, pr = self._c, self._tau, self._gamma, self._p_ref
+        ratio = (u / w) ** self._scaling
+        heat = c * ratio * (pr - w) / tau
+        energy = (c * ud - heat) / g
+        mass = c * pr * (ud / w - u * wd / w ** 2)
+        return u, w, ud, wd, ratio, heat, energy, mass
+
+    def flows(self, t, p, pdot):
+        *_, energy, mass = self._balances(p, pdot)
+        return np.stack([energy, -mass], axis=-1)
+
+    def outflows(self, t, p, pdot):
+        u, w, ud, wd, ratio, heat, energy, mass = self._balances(p, pdot)
+        c, tau, g, pr, sc = self._c, self._tau, self._gamma, self._p_ref, self._scaling
+        dheat_du = sc * heat / u
+        dheat_dw = -c * ratio / tau - sc * heat / w
+        cp = c * pr
+        n = self.n
+        dq_dp = np.zeros((n, 2, 2))
+        dq_dpdot = np.zeros((n, 2, 2))
+        dq_dp[:, 0, 0], dq_dp[:, 0, 1] = -dheat_du / g, -dheat_dw / g
+        dq_dp[:, 1, 0] = cp * wd / w ** 2
+        dq_dp[:, 1, 1] = -cp * (-ud / w ** 2 + 2 * u * wd / w ** 3)
+        dq_dpdot[:, 0, 0] = c / g
+        dq_dpdot[:, 1, 0], dq_dpdot[:, 1, 1] = -cp / w, cp * u / w ** 2
+        return np.stack([energy, -mass], axis=-1), dq_dp, dq_dpdot
+
+
+@register
+class ThermalInlet(ElementFamily):
+    """One line into a ``thermal_chamber`` (ports: line node, chamber gas node, chamber
+    heat node).
+
+    A stiff linear link q = (p_line − p_gas)/r (mg/s into the chamber; r small enough
+    that the drop is negligible) that delivers the line's mass flow to the chamber's
+    mass balance and its enthalpy, T_up/T_w·q with T_up = T_w when entering and the
+    gas temperature T = T_w·θ/p_ref when leaving, to its energy balance.  ``p0`` must
+    be the chamber's (it fixes θ's reference p_ref)."""
+
+    kind = "thermal_inlet"
+    aliases = ()
+    description = "one line into a thermal_chamber: mass and enthalpy of the flow"
+    ports = ("line", "node", "heat")
+    params = {
+        "r": Param("resistance", "link resistance, kPa·s/mg (small)", low=0.0,
+                   low_inclusive=False, default=1e-5),
+        "p0": Param("pressure", "the chamber's p0, kPa (default: ambient)", low=0.0,
+                    low_inclusive=False, default=np.nan),
+    }
+
+    def __init__(self, specs, context):
+        super().__init__(specs, context)
+        self._r = self.column("r")
+        p0 = self.column("p0")
+        self._p_ref = np.where(np.isnan(p0), context.options.ambient, p0)
+
+    def _terms(self, p):
+        q = (p[..., 0] - p[..., 1]) / self._r
+        k = np.where(q >= 0, 1.0, p[..., 2] / self._p_ref)  # T_up / T_w
+        return q, k
+
+    def flows(self, t, p, pdot):
+        q, k = self._terms(p)
+        return np.stack([q, -k * q, q], axis=-1)
+
+    def outflows(self, t, p, pdot):
+        q, k = self._terms(p)
+        g = 1.0 / self._r
+        n = self.n
+        dq_dp = np.zeros((n, 3, 3))
+        dq_dp[:, 0, 0], dq_dp[:, 0, 1] = g, -g
+        dq_dp[:, 1, 0], dq_dp[:, 1, 1] = -k * g, k * g
+        dq_dp[:, 1, 2] = -np.where(q >= 0, 0.0, q / self._p_ref)
+        dq_dp[:, 2, 0], dq_dp[:, 2, 1] = g, -g
+        return np.stack([q, -k * q, q], axis=-1), dq_dp, None

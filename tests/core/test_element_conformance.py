@@ -80,6 +80,20 @@ def _thermal_volume():
         kind="thermal_volume", nodes=("b", "bT"), V=10.0, tau=-1.0)
 
 
+def _thermal_chamber():
+    c = Circuit("chamber", ambient=100.0)
+    c.pressure_source("P1", "a", 250.0)
+    c.resistor("R1", "a", "x1", R=1.0)
+    c.add("thermal_inlet", "I1", ("x1", "g", "gT"))
+    c.add("thermal_inlet", "I2", ("x2", "g", "gT"))
+    c.add("thermal_chamber", "VC", ("g", "gT"), V=30.0, tau=0.5)
+    c.resistor("R2", "x2", "atm", R=1.0)
+    # at rest: equal flows in and out, and the gas at wall temperature (θ = p_ref)
+    g = np.sqrt((250.0 ** 2 + 100.0 ** 2) / 2)
+    return c, {"g": g, "x1": g, "gT": 100.0}, dict(kind="thermal_inlet",
+                                                   nodes=("x", "g", "gT"), r=0.0)
+
+
 def _valve():
     c = Circuit("valve", ambient=96.0)
     c.pressure_source("P1", "a", 500.0)
@@ -91,7 +105,8 @@ def _valve():
 
 CASES = {"pressure_source": _pressure_source, "flow_source": _flow_source,
          "resistor": _resistor, "pipe": _pipe, "volume": _volume, "actuator": _actuator,
-         "valve": _valve, "thermal_volume": _thermal_volume}
+         "valve": _valve, "thermal_volume": _thermal_volume,
+         "thermal_chamber": _thermal_chamber, "thermal_inlet": _thermal_chamber}
 
 
 def test_every_registered_family_has_a_conformance_case():
