@@ -29,6 +29,18 @@ def _fmt(v):
     return "FAILED" if v is None else f"{v:.6g}"
 
 
+def _check_saves(saves, columns, path) -> None:
+    """A ``.save`` signal the results lack (``Tgas(VC)``) is an error naming what exists."""
+    from ..errors import NetlistError
+
+    for signal in saves:
+        if not any(c == signal.key or c.startswith(signal.key + "_") for c in columns):
+            mine = sorted(c for c in columns if f"_{signal.target}_" in c)
+            raise NetlistError(f".save {signal}: element {signal.target!r} has no signal "
+                               f"{signal.quantity!r}", where=str(path),
+                               hint="its signals: " + ", ".join(mine) if mine else None)
+
+
 def main(args) -> int:
     from ..errors import SolverError
     from ..netlist import parse_file
@@ -71,6 +83,7 @@ def main(args) -> int:
             suffix = "" if counts[analysis.kind] == 1 else str(counts[analysis.kind])
             name = f"{analysis.kind}{suffix}{tag}"
             if saves and analysis.kind in ("tran", "dc"):  # only the saved signals
+                _check_saves(deck.saves, result.table(), path)
                 table = result.table(lambda c: any(c.startswith(s + "_") or c == s
                                                    for s in saves))
             else:

@@ -738,8 +738,10 @@ class _Builder:
 
     def _signal(self, item, label="signal"):
         if isinstance(item, Call) and len(item.args) == 1 and isinstance(item.args[0], Word):
-            q = item.name.lower()
-            q = {"v": "p", "pressure": "p", "m": "mdot", "i": "mdot", "flow": "mdot"}.get(q, q)
+            # p and mdot by any of their names; an element's own signal (T, opening …)
+            # as its family spells it
+            q = {"p": "p", "v": "p", "pressure": "p", "mdot": "mdot", "m": "mdot", "i": "mdot",
+                 "flow": "mdot"}.get(item.name.lower(), item.name)
             target = item.args[0].text
             if q == "p":
                 if target not in self.circuit.nodes:

@@ -50,3 +50,17 @@ def test_cli_exit_code_2(path, capsys, tmp_path):
 
 def test_check_exit_code_2(capsys):
     assert main(["check", str(CORPUS[0])]) == 2
+
+
+def test_save_of_a_signal_the_element_lacks_exit_2(capsys, tmp_path):
+    """``T(VC)`` saves the chamber's temperature; ``Tgas(VC)`` is an error naming T_VC_K."""
+    text = ("P1 s 400kPa\nR1 s x 1.0\nthermal_inlet I1 x v vT\n"
+            "thermal_chamber VC v vT V=50mL tau=0.3\n.tran 10ms 0.2s\n.save p(v) {}\n")
+    good, bad = tmp_path / "good.pn", tmp_path / "bad.pn"
+    good.write_text(text.format("T(VC)"))
+    bad.write_text(text.format("Tgas(VC)"))
+    assert main(["run", str(good), "-o", str(tmp_path / "g"), "-q"]) == 0
+    assert (tmp_path / "g" / "tran.csv").read_text().splitlines()[0] == "time_s,p_v_kPa,T_VC_K"
+    assert main(["run", str(bad), "-o", str(tmp_path / "b"), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert "Tgas" in err and "T_VC_K" in err and str(bad) in err and "Traceback" not in err
