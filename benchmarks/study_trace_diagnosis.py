@@ -22,6 +22,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 CASES = {
     "clean": ({}, "adequate"),
     "polytropic": ({"poly_n": 1.3}, "polytropic_volume"),
+    "gas-law-n": ({"gas_law_n": 1.25}, "adequate"),  # = a tank of V/n: indistinguishable
     "dead-volume": ({"V_out": 1.5}, "dead_volume@out"),
     "control-tube": ({"tube_ctrl": (10.0, 2.0)}, "tube@X1.ctrl"),
     "supply-tube": ({"tube_supply": (0.5, 20.0)}, "tube@X1.in"),

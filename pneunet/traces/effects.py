@@ -113,6 +113,9 @@ class VolumeHeatTransfer(CircuitEffect):
         return [self] if _gas_volumes(circuit) else []
 
     def apply(self, circuit, values):
+        """A volume with one line becomes a ``thermal_volume``; one filled and emptied
+        through several becomes a ``thermal_chamber`` with a ``thermal_inlet`` per line,
+        so that each line carries its own enthalpy."""
         import numpy as np
 
         for spec in _gas_volumes(circuit):
@@ -120,10 +123,32 @@ class VolumeHeatTransfer(CircuitEffect):
             V = p["V"]
             if spec.kind == "actuator" and np.isnan(V):
                 V = np.pi / 4 * p["diameter"] ** 2 * p["length"] * 1e-3
+            node, heat = spec.nodes[0], f"{spec.name}__T"
+            p0 = None if np.isnan(p["p0"]) else float(p["p0"])
             del circuit.elements[spec.name]
-            circuit.add("thermal_volume", spec.name, (spec.nodes[0], f"{spec.name}__T"),
-                        V=float(V), tau=float(values["tau"]),
-                        p0=None if np.isnan(p["p0"]) else float(p["p0"]))
+            lines = _lines_at(circuit, node)
+            kind = "thermal_volume" if len(lines) <= 1 else "thermal_chamber"
+            circuit.add(kind, spec.name, (node, heat), V=float(V), tau=float(values["tau"]),
+                        p0=p0)
+            if kind == "thermal_chamber":
+                for line, k in lines:
+                    nodes = list(line.nodes)
+                    nodes[k] = f"{node}__{line.name}"
+                    line.nodes = tuple(nodes)
+                    circuit.add("thermal_inlet", f"I{spec.name}_{line.name}",
+                                (nodes[k], node, heat), p0=p0)
+
+
+def _lines_at(circuit, node):
+    """(element spec, port index) of every port at ``node`` that passes flow."""
+    from .. import elements
+
+    out = []
+    for s in circuit.elements.values():
+        fam = elements.family(s.kind)
+        ports = fam.flow_ports if fam.flow_ports is not None else range(len(s.nodes))
+        out += [(s, k) for k in ports if k < len(s.nodes) and s.nodes[k] == node]
+    return out
 
 
 class DeadVolume(CircuitEffect):

@@ -89,7 +89,7 @@ class TraceModel:
 
 def settled_pressures(circuit) -> dict:
     """({node: pressure}, algebraic nodes) of the circuit's consistent state at t = 0
-    without dead volumes (the algebraic nodes solved for the initial storage
+    (every node, those of pressure sources and the reference included) without dead volumes (the algebraic nodes solved for the initial storage
     pressures), kPa."""
     from ..engine.assembly import CircuitDAE
     from ..engine.simulate import consistent_state
@@ -101,7 +101,8 @@ def settled_pressures(circuit) -> dict:
         y, _ = consistent_state(dae, 0.0, dae.initial_state(0.0))
     finally:
         circuit.options = options
-    return (dict(zip(dae.node_names, map(float, y))),
+    names = list(dae.node_names) + list(dae.fixed_names)  # sources' nodes too
+    return (dict(zip(names, map(float, dae.full_pressures(0.0, y)))),
             {dae.node_names[i] for i in dae.algebraic_idx})
 
 

@@ -31,12 +31,17 @@ def evaluate_many(fun, xs, pool=None) -> list:
     return list(pool.map(fun, xs))
 
 
+#: fresh starts of LM from the bound after it stepped outside the box
+RESTARTS = 2
+
+
 def least_squares_log(fun, x0, lb, ub, *, max_nfev: int = 40, diff_step: float = 1e-3,
                       pool=None, xtol: float = 1e-5, ftol: float = 1e-6) -> LsqResult:
     """Levenberg–Marquardt on ``fun(x)`` (x: ln-parameters, kept in [lb, ub] by clipping)
     with forward differences of step ``diff_step`` (backwards at an upper bound).
 
-    ``max_nfev`` caps the simulations, Jacobian columns included."""
+    ``max_nfev`` caps the simulations, Jacobian columns included (over the
+    :data:`RESTARTS` fresh starts from a bound that LM stepped past)."""
     from scipy import optimize
 
     lb, ub = np.asarray(lb, float), np.asarray(ub, float)
@@ -66,8 +71,15 @@ def least_squares_log(fun, x0, lb, ub, *, max_nfev: int = 40, diff_step: float =
         return np.column_stack([(c - f0) / h for c, h in zip(cols, steps)])
 
     p = len(x0)
-    res = optimize.least_squares(f, np.clip(x0, lb, ub), jac=jac, method="lm",
-                                 max_nfev=max(2, max_nfev // (p + 1)), xtol=xtol, ftol=ftol)
-    x = np.clip(res.x, lb, ub)
+    x = np.clip(x0, lb, ub)
+    for _ in range(1 + RESTARTS):
+        left = max_nfev - count["n"]
+        res = optimize.least_squares(f, x, jac=jac, method="lm",
+                                     max_nfev=max(2, left // (p + 1)), xtol=xtol, ftol=ftol)
+        x = np.clip(res.x, lb, ub)
+        # LM walked past a bound, where the clipped residual is flat and its damping
+        # grows without progress: start again from the bound with fresh damping
+        if np.array_equal(x, res.x) or max_nfev - count["n"] < 2 * (p + 1):
+            break
     return LsqResult(x, np.asarray(res.fun), np.asarray(res.jac), count["n"], bool(res.success),
                      str(res.message))
