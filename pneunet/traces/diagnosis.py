@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..errors import SolverError
 from ..truth.locate import best_lag, hot_phases, phase_profile
 from ..truth.noise import difference_sigma, segments
 from ..truth.verdict import TOLERANCE, Step, at_floor, decide
@@ -279,11 +280,17 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
             timing["screen_s"] = time.perf_counter() - t0
             timing["screen_simulations"] = sum(r["simulations"] for r in rows)
             t0 = time.perf_counter()
+            failed = {}
             for row in rows[:screen]:  # best first; stop at one that reaches the floor
                 eff = row["effect"]
                 say(f"fitting {eff.name}")
-                fits[eff.name] = _fit_effects(build, df, params, fixed, node, train, (eff,),
-                                              base, [row], 4 * max_nfev, pool, options, where)
+                try:
+                    fits[eff.name] = _fit_effects(build, df, params, fixed, node, train,
+                                                  (eff,), base, [row], 4 * max_nfev, pool,
+                                                  options, where)
+                except SolverError as err:  # its fit does not simulate the whole record
+                    failed[eff.name] = f"fit failed: {err}"
+                    continue
                 if at_floor(fits[eff.name].error(test), floor, tolerance):
                     break
             timing["candidate_fits_s"] = time.perf_counter() - t0
@@ -291,8 +298,10 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
             ranking += [_row(n, fits[n], test, floor) for n in fitted]
             ranking += [{"effect": r["effect"].name, "held_out_rms": None, "fitted": False,
                          "screen_rms": math.sqrt(r["rss"] / n_res),
-                         "note": "not fitted: across its parameter range it fits the first "
-                                 "cycles worse than the ones fitted fully"}
+                         "note": failed.get(r["effect"].name,
+                                            "not fitted: across its parameter range it fits "
+                                            "the first cycles worse than the ones fitted "
+                                            "fully")}
                         for r in rows if r["effect"].name not in fits]
             ranking.sort(key=lambda r: (r["held_out_rms"] is None, r["held_out_rms"] or 0))
             if fitted:
@@ -308,13 +317,17 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
                         and steps[1].held_out < steps[0].held_out:
                     nxt = fitted[1]
                     say(f"fitting {best} + {nxt}")
-                    pair = _fit_effects(build, df, params, fixed, node, train,
-                                        (fits[best].effects[0], fits[nxt].effects[0]), base,
-                                        None, max_nfev, pool, options, where,
-                                        start={**fits[best].values, **fits[nxt].values})
-                    key = f"{best} + {nxt}"
-                    fits[key] = pair
-                    if pair.error(test) < steps[-1].held_out:
+                    try:
+                        pair = _fit_effects(build, df, params, fixed, node, train,
+                                            (fits[best].effects[0], fits[nxt].effects[0]),
+                                            base, None, max_nfev, pool, options, where,
+                                            start={**fits[best].values, **fits[nxt].values})
+                    except SolverError as err:
+                        pair = None
+                        notes.append(f"{best} + {nxt}: fit failed: {err}")
+                    else:
+                        fits[f"{best} + {nxt}"] = pair
+                    if pair is not None and pair.error(test) < steps[-1].held_out:
                         steps.append(Step(nxt, pair.error(test), effects=(best, nxt)))
                     verdict, accepted = decide(steps, floor, tolerance)
         # the steps' floor ratios may have changed with the floor: decide once more
