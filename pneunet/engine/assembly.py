@@ -160,15 +160,17 @@ class CircuitDAE:
             full[..., nodes] = family.pinned_pressure(t)
         return full
 
-    def _pressures_at(self, t, y, ydot):
-        """The shared pressure and rate buffers of all nodes at one time (kPa, kPa/s)."""
+    def _pressures_at(self, t, y, ydot=None):
+        """The shared pressure and rate buffers of all nodes at one time (kPa, kPa/s);
+        without ``ydot`` the rate buffer is left as it is."""
         p = self._p
         p[:self.n] = y
         if t != self._pinned_at:
             for family, nodes in self._pinned:
                 p[nodes] = family.pinned_pressure(t)
             self._pinned_at = t
-        self._pdot[:self.n] = ydot
+        if ydot is not None:
+            self._pdot[:self.n] = ydot
         return p, self._pdot
 
     def evaluate(self, t, y, ydot, cj=None, absolute=False):
@@ -198,6 +200,10 @@ class CircuitDAE:
         scale = np.bincount(self._partial_to, weights=np.abs(partials),
                             minlength=self.nnz + 1)[:self.nnz]
         return res, data, scale
+
+    def algebraic_block(self) -> "AlgebraicBlock":
+        """F_a and ∂F_a/∂y_a with ẏ = 0, from only the elements at algebraic nodes."""
+        return AlgebraicBlock(self)
 
     def dense(self, data, out=None) -> np.ndarray:
         """The Jacobian with CSC ``data`` as a dense (n, n) array (written into ``out``)."""
@@ -324,6 +330,79 @@ class CircuitDAE:
 
     def node_index(self, name: str) -> int:
         return self._index[name]
+
+
+class AlgebraicBlock:
+    """The algebraic equations F_a(y) (ẏ = 0) and their block J_aa = ∂F_a/∂y_a.
+
+    Only the element instances with a port at an algebraic node are evaluated
+    (each family restricted to them once, here), and only the flows into and
+    partials between algebraic nodes are summed: the fold indicator and the
+    branch jump need nothing else.  J_aa is dense (na, na) up to ``dense_limit``
+    unknowns, else CSC with a pattern fixed here.
+    """
+
+    def __init__(self, dae, dense_limit: int = 40):
+        self.dae = dae
+        alg = dae.algebraic_idx
+        self.size = na = alg.size
+        self.dense = na <= dense_limit
+        local = np.full(dae.n + len(dae.fixed_names), -1)
+        local[alg] = np.arange(na)
+        self._parts, flow_to, pair_to = [], [], []
+        for block in dae._active:
+            on = local[block.port_node] >= 0
+            members = np.flatnonzero(on.any(axis=1))
+            if not members.size:
+                continue
+            fam = block.family
+            if members.size < fam.n:  # the same family over fewer instances
+                fam = type(fam)([fam.specs[k] for k in members], fam.context)
+            at, on = local[block.port_node[members]], on[members]
+            pairs = on[:, :, None] & on[:, None, :]
+            self._parts.append((fam, block.port_node[members], np.flatnonzero(on.ravel()),
+                                np.flatnonzero(pairs.ravel()),
+                                np.zeros(block.port_node[members].shape)))
+            flow_to.append(at[on])
+            pair_to.append((np.broadcast_to(at[:, :, None], pairs.shape)[pairs],
+                            np.broadcast_to(at[:, None, :], pairs.shape)[pairs]))
+        self._flow_to = np.concatenate(flow_to) if flow_to else np.empty(0, int)
+        rows = np.concatenate([r for r, _ in pair_to]) if pair_to else np.empty(0, int)
+        cols = np.concatenate([c for _, c in pair_to]) if pair_to else np.empty(0, int)
+        self._rows = rows
+        keys, self._pair_to = np.unique(cols * na + rows, return_inverse=True)
+        if self.dense:
+            self._pair_to = rows * na + cols  # row-major position in the dense block
+            self._n_entries = na * na
+        else:
+            from scipy.sparse import csc_matrix
+
+            self._n_entries = keys.size
+            self._matrix = csc_matrix((np.ones(keys.size), (keys % na, keys // na)),
+                                      shape=(na, na))
+            self._matrix.sort_indices()
+
+    def evaluate(self, t, y, residual=True):
+        """(F_a or None, J_aa, s_a): s_a the row scale Σ|contribution| of each algebraic
+        equation over its algebraic columns (mg/(s·kPa)), floored at 1e-300."""
+        p, _ = self.dae._pressures_at(t, y)
+        flows, partials = [], []
+        for fam, nodes, flow_at, pair_at, zeros in self._parts:
+            q, dq_dp, _ = fam.outflows(t, p[nodes], zeros)
+            if residual:
+                flows.append(q.ravel()[flow_at])
+            partials.append(dq_dp.ravel()[pair_at])
+        partials = np.concatenate(partials)
+        res = np.bincount(self._flow_to, weights=np.concatenate(flows),
+                          minlength=self.size) if residual else None
+        data = np.bincount(self._pair_to, weights=partials, minlength=self._n_entries)
+        scale = np.bincount(self._rows, weights=np.abs(partials), minlength=self.size)
+        if self.dense:
+            jac = data.reshape(self.size, self.size)
+        else:
+            jac = self._matrix.copy()
+            jac.data = data
+        return res, jac, np.maximum(scale, 1e-300)
 
 
 def _distinct(times: list[np.ndarray]) -> np.ndarray:

@@ -29,47 +29,18 @@ class FoldMonitor:
     """Fold indicator and jump for one :class:`~pneunet.engine.assembly.CircuitDAE`."""
 
     def __init__(self, dae, threshold: float):
-        from scipy.sparse import coo_matrix
-
         self.dae = dae
         self.alg = dae.algebraic_idx
         self.threshold = threshold
         self.reference = 1.0
-        local = np.full(dae.n, -1)
-        local[self.alg] = np.arange(self.alg.size)
-        rows, cols = dae.entries()
-        self._select = np.flatnonzero((local[rows] >= 0) & (local[cols] >= 0))
-        self._rows, self._cols = local[rows[self._select]], local[cols[self._select]]
-        # CSC layout of the algebraic block; the selected entries are already in CSC order
-        pattern = coo_matrix((np.arange(1, self._select.size + 1), (self._rows, self._cols)),
-                             shape=(self.alg.size,) * 2).tocsc()
-        self._order = pattern.data.astype(int) - 1
-        self._indices, self._indptr = pattern.indices, pattern.indptr
-
-    def _blocks(self, t, y):
-        """J_aa (dense up to DENSE_BLOCK unknowns, else CSC) and the absolute row
-        scale of the algebraic equations."""
-        _, data, absdata = self.dae.evaluate(t, y, np.zeros(self.dae.n), cj=0.0, absolute=True)
-        return self._assemble(data, absdata)
-
-    def _assemble(self, data, absdata):
-        """J_aa and the row scale from the Jacobian's CSC data and its absolute sums."""
-        size = self.alg.size
-        if size <= DENSE_BLOCK:
-            jac = np.zeros((size, size))
-            jac[self._rows, self._cols] = data[self._select]
-        else:
-            from scipy.sparse import csc_matrix
-
-            jac = csc_matrix((data[self._select][self._order], self._indices, self._indptr),
-                             shape=(size, size))
-        scale = np.bincount(self._rows, weights=absdata[self._select], minlength=self.alg.size)
-        return jac, np.maximum(scale, 1e-300)
+        self._block = dae.algebraic_block()
 
     def indicator(self, t, y) -> float:
         """Smallest normalised LU pivot of J_aa (0 at a fold, ~1 far from one)."""
-        jac, scale = self._blocks(t, y)
+        _, jac, scale = self._block.evaluate(t, y, residual=False)
         if isinstance(jac, np.ndarray):
+            if jac.shape[0] == 1:
+                return float(abs(jac[0, 0]) / scale[0])
             jac = jac / scale[:, None]
         else:
             from scipy.sparse import diags
@@ -152,9 +123,7 @@ class FoldMonitor:
 
     def _system(self, t, y):
         """F_a, J_aa and the row scale s_a at (t, y), with ẏ = 0."""
-        res, data, absdata = self.dae.evaluate(t, y, np.zeros(self.dae.n), cj=0.0,
-                                               absolute=True)
-        return res[self.alg], *self._assemble(data, absdata)
+        return self._block.evaluate(t, y)
 
     @staticmethod
     def _stable(jac) -> bool:
@@ -167,15 +136,21 @@ class FoldMonitor:
 
 RELAX_STEPS = 400  # relaxation steps (accepted or not) before a jump attempt gives up
 RELAX_TOL = 3e-2  # relaxation path error per step, relative to the pressure
+RELAX_GROWTH = 1000  # largest growth of Δτ after an accepted step
 
 
 def _solve(jac, scale, dtau, rate):
     """Δy of one relaxation step: (I + Δτ·S⁻¹J)·Δy = Δτ·rate, None if singular."""
     rhs = dtau * rate
     if isinstance(jac, np.ndarray):
-        matrix = np.eye(len(rhs)) + dtau * jac / scale[:, None]
+        matrix = dtau * jac / scale[:, None]
+        matrix.flat[::len(rhs) + 1] += 1.0
         try:
-            step = np.linalg.solve(matrix, rhs)
+            if len(rhs) == 1:  # one algebraic node: a division, no LAPACK call
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    step = rhs / matrix[0]
+            else:
+                step = np.linalg.solve(matrix, rhs)
         except np.linalg.LinAlgError:
             return None
     else:
@@ -183,21 +158,15 @@ def _solve(jac, scale, dtau, rate):
         from scipy.sparse.linalg import splu
 
         try:
-            step = splu((identity(len(res)) + diags(dtau / scale) @ jac).tocsc()).solve(rhs)
+            step = splu((identity(len(rhs)) + diags(dtau / scale) @ jac).tocsc()).solve(rhs)
         except RuntimeError:
             return None
     return step if np.all(np.isfinite(step)) else None
 
 
-DENSE_BLOCK = 40  # algebraic blocks up to this size are factorised with dense LAPACK
-
-
 def _lu_pivots(jac):
     """Diagonal of U in an LU factorisation of ``jac`` (dense or CSC)."""
-    n = jac.shape[0]
     if isinstance(jac, np.ndarray):
-        if n == 1:
-            return jac[0]
         import warnings
 
         from scipy.linalg import lu_factor
@@ -211,5 +180,5 @@ def _lu_pivots(jac):
     try:
         lu = splu(jac)
     except RuntimeError:  # exactly singular
-        return np.zeros(n)
+        return np.zeros(jac.shape[0])
     return lu.U.diagonal()

@@ -1,0 +1,37 @@
+"""The fold indicator's algebraic block equals the full Jacobian's algebraic part."""
+import numpy as np
+import pytest
+
+from pneunet import Circuit
+from pneunet.engine.assembly import AlgebraicBlock, CircuitDAE
+from pneunet.valve_params import PAPER_VALVES
+
+
+def _ladder(cells=6):
+    """Valves in series with leaks to the atmosphere, volumes on every other node:
+    algebraic and differential nodes side by side, instances on both kinds."""
+    c = Circuit("ladder", ambient=96.0)
+    c.pressure_source("PS", "n0", 496.0)
+    for k in range(cells):
+        c.valve(f"X{k}", f"n{k}", f"n{k + 1}", f"n{max(k - 1, 0)}", PAPER_VALVES["axi"])
+        c.resistor(f"Rl{k}", f"n{k + 1}", "atm", 3.0 + k)
+        if k % 2:
+            c.volume(f"V{k}", f"n{k + 1}", 5.0)
+    return c
+
+
+@pytest.mark.parametrize("dense_limit", [40, 0])
+def test_algebraic_block_matches_the_full_jacobian(dense_limit):
+    dae = CircuitDAE(_ladder())
+    alg = dae.algebraic_idx
+    assert 1 < alg.size < dae.n
+    y = np.random.default_rng(1).uniform(150.0, 450.0, dae.n)
+    res, data, absdata = dae.evaluate(0.0, y, np.zeros(dae.n), cj=0.0, absolute=True)
+    full, scale = dae.dense(data), dae.dense(absdata)
+    block = AlgebraicBlock(dae, dense_limit=dense_limit)
+    res_a, jac, scale_a = block.evaluate(0.0, y)
+    jac = jac if isinstance(jac, np.ndarray) else jac.toarray()
+    np.testing.assert_allclose(res_a, res[alg], rtol=1e-13, atol=1e-12)
+    np.testing.assert_allclose(jac, full[np.ix_(alg, alg)], rtol=1e-13, atol=1e-12)
+    np.testing.assert_allclose(scale_a, scale[np.ix_(alg, alg)].sum(axis=1), rtol=1e-13)
+    assert block.evaluate(0.0, y, residual=False)[0] is None
