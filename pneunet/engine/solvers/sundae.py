@@ -6,8 +6,8 @@ interface (scikit-sundae's own sparse direct solver, SuperLU_MT, costs ~15 ms
 per factorisation even at a few hundred unknowns — benchmarks/README.md):
 
 * at each Jacobian set-up IDA asks for, the analytic ∂F/∂y and ∂F/∂ẏ are
-  evaluated and P = ∂F/∂y + cj·∂F/∂ẏ is factorised with scipy's SuperLU, in a
-  fill-reducing order computed once;
+  evaluated and P = ∂F/∂y + cj·∂F/∂ẏ is factorised
+  (:mod:`~pneunet.engine.solvers.sparse_lu`: bordered band or SuperLU);
 * GMRES is given the operator A = P/c, with c = 2/(1 + cj/cj_P) the correction
   IDA applies to direct solves when cj has changed since the set-up, and P's
   LU as preconditioner.  P⁻¹A is then c⁻¹·I: GMRES converges in one iteration
@@ -24,6 +24,7 @@ import sys
 import numpy as np
 
 from .base import EVENT, FAILED, OK, TSTOP, Integrator, StepResult
+from .sparse_lu import sparse_lu
 
 
 def _import_ida():
@@ -56,7 +57,6 @@ def _import_ida():
 ida = _import_ida()
 
 DENSE_LIMIT = 40  # unknowns up to which the dense linear solver is faster
-PIVOT_THRESHOLD = 0.1  # SuperLU keeps a diagonal pivot ≥ 0.1 × the column's largest entry
 
 
 class SundaeIntegrator(Integrator):
@@ -76,6 +76,7 @@ class SundaeIntegrator(Integrator):
             # one matrix object, refilled in place: building a scipy matrix
             # validates its indices, which costs more than the data
             self._matrix = dae.csc(np.zeros(dae.nnz))
+            self._factors = sparse_lu(self._matrix)
             self._lu, self._cj_setup, self._last_product = None, 1.0, (None, None)
             options.update(linsolver="gmres", krylov_dim=5,
                            precond=ida.IDAPrecond(self._lu_setup, self._lu_solve),
@@ -97,31 +98,10 @@ class SundaeIntegrator(Integrator):
         self.dae.dense(self.dae.evaluate(t, y, yp, cj)[1], out=jj)
 
     def _lu_setup(self, t, y, yp, res, cj):
-        from scipy.sparse.linalg import splu
-
         self.n_jac += 1
         self._matrix.data[:] = self.dae.evaluate(t, y, yp, cj)[1]
-        if self._lu is None:
-            self._order()
-        self._permuted.data[:] = self._matrix.data[self._permuted_from]
-        self._lu = splu(self._permuted, permc_spec="NATURAL", diag_pivot_thresh=PIVOT_THRESHOLD,
-                        panel_size=1, options=dict(SymmetricMode=True))
+        self._lu = self._factors.factor(self._matrix.data)
         self._cj_setup = cj
-
-    def _order(self):
-        """A fill-reducing ordering, computed once (the pattern never changes): minimum
-        degree on PᵀP + P, applied to rows and columns alike so that the diagonal stays
-        the preferred pivot.  Each factorisation then skips the ordering (SuperLU's
-        COLAMD on every call cost 2–4× the numeric factorisation)."""
-        from scipy.sparse.linalg import splu
-
-        lu = splu(self._matrix, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=PIVOT_THRESHOLD,
-                  options=dict(SymmetricMode=True))
-        self._perm = lu.perm_c
-        index = self.dae.csc(np.arange(1, self.dae.nnz + 1, dtype=float))  # no zero entry
-        self._permuted = index[self._perm][:, self._perm].tocsc()
-        self._permuted.sort_indices()
-        self._permuted_from = self._permuted.data.astype(int) - 1
 
     def _operator(self, t, y, yp, res, v, av, cj):
         """A·v with A = P/c (see the module docstring); remembers v for _lu_solve."""
@@ -134,7 +114,7 @@ class SundaeIntegrator(Integrator):
         if product is not None and np.array_equal(rvec, product):
             zvec[:] = solution  # P⁻¹(P·v/c) = v/c
         else:
-            zvec[self._perm] = self._lu.solve(np.asarray(rvec)[self._perm])
+            zvec[:] = self._lu.solve(rvec)
 
     def init(self, t, y, yp):
         result = self._solver.init_step(t, y, yp)
@@ -152,4 +132,4 @@ class SundaeIntegrator(Integrator):
     def counters(self):
         return {"residual_calls": self.n_res, "jacobian_calls": self.n_jac,
                 "linear_solver": "dense" if self.dense else
-                "sparse LU (SuperLU) through GMRES, one iteration"}
+                f"sparse LU ({self._factors.name}) through GMRES, one iteration"}
