@@ -173,11 +173,9 @@ class CircuitDAE:
             self._pdot[:self.n] = ydot
         return p, self._pdot
 
-    def evaluate(self, t, y, ydot, cj=None, absolute=False):
+    def evaluate(self, t, y, ydot, cj=None):
         """Residual F(t, y, ẏ); with ``cj`` also the CSC data of ∂F/∂y + cj·∂F/∂ẏ.
 
-        With ``absolute`` a third array holds Σ|contribution| per entry (the scale
-        of each entry before cancellation, used by the fold indicator).
         Contributions of all families are summed by one bincount each.
         """
         p, pdot = self._pressures_at(t, y, ydot)
@@ -193,13 +191,9 @@ class CircuitDAE:
             flows[block.flows] = q.ravel()
         res = np.bincount(self._flow_to, weights=flows, minlength=self.n + 1)[:self.n]
         if cj is None:
-            return (res, None, None) if absolute else (res, None)
-        data = np.bincount(self._partial_to, weights=partials, minlength=self.nnz + 1)[:self.nnz]
-        if not absolute:
-            return res, data
-        scale = np.bincount(self._partial_to, weights=np.abs(partials),
-                            minlength=self.nnz + 1)[:self.nnz]
-        return res, data, scale
+            return res, None
+        return res, np.bincount(self._partial_to, weights=partials,
+                                minlength=self.nnz + 1)[:self.nnz]
 
     def algebraic_block(self) -> "AlgebraicBlock":
         """F_a and ∂F_a/∂y_a with ẏ = 0, from only the elements at algebraic nodes."""
