@@ -41,6 +41,14 @@ def _check_saves(saves, columns, path) -> None:
                                hint="its signals: " + ", ".join(mine) if mine else None)
 
 
+def _column_names(result) -> list[str]:
+    """The result's table columns, without computing any signal (demux6: 450 MB if all
+    element signals were computed just to learn their names)."""
+    names = []
+    result.table(lambda column: names.append(column))  # None: no column is computed
+    return names
+
+
 def main(args) -> int:
     from ..errors import SolverError
     from ..netlist import parse_file
@@ -83,7 +91,7 @@ def main(args) -> int:
             suffix = "" if counts[analysis.kind] == 1 else str(counts[analysis.kind])
             name = f"{analysis.kind}{suffix}{tag}"
             if saves and analysis.kind in ("tran", "dc"):  # only the saved signals
-                _check_saves(deck.saves, result.table(), path)
+                _check_saves(deck.saves, _column_names(result), path)
                 table = result.table(lambda c: any(c.startswith(s + "_") or c == s
                                                    for s in saves))
             else:
