@@ -136,10 +136,28 @@ def main(args) -> int:
     with stdout_to_stderr(args.json):
         out, text = _run(args, build, params, fixed, say)
     if args.json:
-        print(json.dumps(out, indent=1, default=_json_default))
+        print(json.dumps(_finite(out), indent=1, default=_json_default, allow_nan=False))
     else:
         print(text)
     return 0
+
+
+def _finite(o):
+    """``o`` with every non-finite float as None (JSON null: an unbounded interval end,
+    a quantity not computed); JSON has no inf or NaN."""
+    import math
+
+    import numpy as np
+
+    if isinstance(o, dict):
+        return {k: _finite(v) for k, v in o.items()}
+    if isinstance(o, (list, tuple)):
+        return [_finite(v) for v in o]
+    if isinstance(o, np.ndarray):
+        return _finite(o.tolist())
+    if isinstance(o, (float, np.floating)):
+        return float(o) if math.isfinite(o) else None
+    return o
 
 
 def _json_default(o):

@@ -94,8 +94,9 @@ def intervals(x, J, r, names, *, groups=None, confidence: float = 0.95, log: boo
                         "Newey–West sandwich intervals, widened accordingly"}
     tq = stats.t.ppf(0.5 + confidence / 2, dof)
     conv = np.exp if log else (lambda v: v)
-    ci = {k: (float(conv(x[i] - tq * se[i])), float(conv(x[i] + tq * se[i])))
-          for i, k in enumerate(names)}
+    with np.errstate(over="ignore"):  # an unbounded end is inf (JSON writers say null)
+        ci = {k: (float(conv(x[i] - tq * se[i])), float(conv(x[i] + tq * se[i])))
+              for i, k in enumerate(names)}
     info["s"] = math.sqrt(s2)
     info["dof"] = float(dof)
     return ci, dict(zip(names, map(float, se))), info

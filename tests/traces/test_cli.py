@@ -58,3 +58,17 @@ def test_json_is_the_only_thing_on_stdout(tmp_path, capfd, record):
     lo, hi = j["fit"]["ci"]["Rvent"]
     assert lo < j["fit"]["values"]["Rvent"] < hi
     assert j["fit"]["values"]["Rvent"] == pytest.approx(3.0, rel=0.02)
+
+
+def test_json_writer_turns_unbounded_interval_ends_into_null():
+    """An interval whose upper end overflows (a parameter the data do not bound) is null
+    in --json output, which stays valid JSON (json has no Infinity)."""
+    import json
+
+    import numpy as np
+
+    from pneunet.cli.fit_trace import _finite
+
+    out = {"fit": {"ci": {"R": (0.5, float("inf")), "V": np.array([1.0, np.nan])}}, "n": 3}
+    text = json.dumps(_finite(out), allow_nan=False)
+    assert json.loads(text) == {"fit": {"ci": {"R": [0.5, None], "V": [1.0, None]}}, "n": 3}
