@@ -202,9 +202,6 @@ class _ScreenTask:
 #: largest change of a base parameter (ln value) in one screening step, and the steps
 SCREEN_STEP = 0.25
 SCREEN_STEPS = 1
-#: the screen simulates with rtol and atol this many times the fit's: it ranks by
-#: residuals of the size of the noise and takes no finite differences
-SCREEN_LOOSER = 10.0
 
 
 def _run_task(task):
@@ -277,10 +274,8 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
             data_fit = _fit_data(df, train, base)
             n_res = sum(int(v.sum()) for v in data_fit[3].values())
             typical = base.wall_time_s / max(base.nfev, 1)
-            loose = {k: v * SCREEN_LOOSER if k in ("rtol", "atol") else v
-                     for k, v in options.items()}
             rows = _screen(cand, names, x_hat, base.extras["jacobian"], params,
-                           ((build, fixed), {"options": loose, "typical_s": typical}),
+                           ((build, fixed), {"options": options, "typical_s": typical}),
                            data_fit, pool)
             timing["screen_s"] = time.perf_counter() - t0
             timing["screen_simulations"] = sum(r["simulations"] for r in rows)
