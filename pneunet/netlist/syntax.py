@@ -209,8 +209,17 @@ def _item(node, name, lines) -> Item:
 
 
 def read_source(path: Path) -> SourceText:
+    """The parsed netlist file: UTF-8, with or without a byte-order mark."""
     try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
+        raw = path.read_bytes()
+    except OSError as exc:
         raise NetlistError(f"cannot read {path}: {exc.strerror or exc}") from None
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        line = raw.count(b"\n", 0, exc.start) + 1
+        column = exc.start - (raw.rfind(b"\n", 0, exc.start) + 1) + 1
+        raise NetlistError(f"byte 0x{raw[exc.start]:02x} is not UTF-8 text",
+                           span=SourceSpan(str(path), line, column),
+                           hint="save the netlist as UTF-8 (netlists are plain text)") from None
     return parse_text(text, str(path), path)

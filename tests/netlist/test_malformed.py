@@ -64,3 +64,15 @@ def test_save_of_a_signal_the_element_lacks_exit_2(capsys, tmp_path):
     assert main(["run", str(bad), "-o", str(tmp_path / "b"), "-q"]) == 2
     err = capsys.readouterr().err
     assert "Tgas" in err and "T_VC_K" in err and str(bad) in err and "Traceback" not in err
+
+
+def test_byte_order_mark_is_accepted_and_non_utf8_bytes_are_located(capsys, tmp_path):
+    """A UTF-8 BOM (Windows editors) parses; a byte that is not UTF-8 is exit 2 at its
+    line and column, no traceback."""
+    good, bad = tmp_path / "bom.pn", tmp_path / "latin1.pn"
+    good.write_bytes(b"\xef\xbb\xbfP1 a 200kPa\nR1 a atm 1\nV1 a 10mL\n")
+    bad.write_bytes(b"P1 a 200kPa\nR1 a atm 1 ; r\xe9sistance\nV1 a 10mL\n")
+    assert parse_file(good).circuit.elements["P1"].kind == "pressure_source"
+    assert main(["check", str(bad)]) == 2
+    err = capsys.readouterr().err
+    assert f"{bad}:2:15: error: byte 0xe9 is not UTF-8" in err and "Traceback" not in err
