@@ -13,10 +13,15 @@ def register(subparsers) -> None:
 
 
 def main(args) -> int:
+    import sys
+
+    from ..engine.topology import dangling_nodes
     from ..netlist import parse_file
 
     deck = parse_file(args.netlist)
     deck.circuit.validate()
+    for warning in dangling_nodes(deck.circuit):
+        print(f"warning: {warning}", file=sys.stderr)
     print(f"{args.netlist}: ok")
     print(deck.circuit.summary())
     analyses = ", ".join(f".{a.kind}" for a in deck.analyses) or "none"

@@ -51,6 +51,7 @@ def _column_names(result) -> list[str]:
 
 def main(args) -> int:
     from ..errors import SolverError
+    from ..engine.topology import dangling_nodes
     from ..netlist import parse_file
     from ..netlist.runner import RunResult, evaluate_measures, measure_unit, run_analysis
     from ..engine.solution import write_csv
@@ -58,6 +59,8 @@ def main(args) -> int:
     path = Path(args.netlist)
     deck = parse_file(path)
     deck.circuit.validate()
+    for warning in dangling_nodes(deck.circuit):
+        print(f"warning: {warning}", file=sys.stderr)
     points = deck.step_points()
     out_dir = Path(args.output) if args.output else Path.cwd() / f"{path.stem}_results"
     out_dir.mkdir(parents=True, exist_ok=True)

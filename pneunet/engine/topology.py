@@ -82,3 +82,25 @@ def _components(nodes, edges) -> list[set[str]]:
     for n in nodes:
         groups.setdefault(root(n), set()).add(n)
     return list(groups.values())
+
+
+def dangling_nodes(circuit) -> list[str]:
+    """Warnings for nodes with a single connection (a misspelt node name makes one, as
+    in SPICE): ``file:line: node 'tnak' has one connection (Rvent); did you mean 'tank'?``."""
+    import difflib
+
+    seen: dict[str, list] = {}
+    for spec in circuit.elements.values():
+        for node in spec.nodes:
+            seen.setdefault(node, []).append(spec)
+    out = []
+    for node, specs in seen.items():
+        if len(specs) != 1 or circuit.is_reference(node):
+            continue
+        spec = specs[0]
+        others = [n for n in seen if n != node and not circuit.is_reference(n)]
+        close = difflib.get_close_matches(node, others, n=1, cutoff=0.6)
+        where = f"{spec.span}: " if spec.span else ""
+        out.append(f"{where}node {node!r} has one connection ({spec.name})"
+                   + (f"; did you mean {close[0]!r}?" if close else ""))
+    return out

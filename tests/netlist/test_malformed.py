@@ -76,3 +76,19 @@ def test_byte_order_mark_is_accepted_and_non_utf8_bytes_are_located(capsys, tmp_
     assert main(["check", str(bad)]) == 2
     err = capsys.readouterr().err
     assert f"{bad}:2:15: error: byte 0xe9 is not UTF-8" in err and "Traceback" not in err
+
+
+def test_a_node_with_one_connection_is_warned_with_a_did_you_mean(capsys, tmp_path):
+    """``Rvent tnak atm`` (tank misspelt) makes a node with one connection: check and run
+    say so on stderr, naming the line and the likely node; the shipped netlists have none."""
+    path = tmp_path / "typo.pn"
+    path.write_text("P1 supply 300kPa\nR1 supply tank 1\nVtank tank 10mL\n"
+                    "Rvent tnak atm 1\n.tran 10ms 0.1s\n")
+    assert main(["check", str(path)]) == 0
+    err = capsys.readouterr().err
+    assert f"{path}:4:1: node 'tnak' has one connection (Rvent); did you mean 'tank'?" in err
+    assert main(["run", str(path), "-o", str(tmp_path / "out"), "-q"]) == 0
+    assert "did you mean 'tank'" in capsys.readouterr().err
+    for shipped in sorted((Path(__file__).parents[2] / "netlists").glob("*.pn")):
+        assert main(["check", str(shipped)]) == 0
+        assert "warning" not in capsys.readouterr().err, shipped
