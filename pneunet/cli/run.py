@@ -63,6 +63,11 @@ def main(args) -> int:
         print(f"warning: {warning}", file=sys.stderr)
     points = deck.step_points()
     out_dir = Path(args.output) if args.output else Path.cwd() / f"{path.stem}_results"
+    if out_dir.exists() and not out_dir.is_dir():
+        from ..errors import PneunetError
+
+        raise PneunetError(f"-o {out_dir}: a file of that name exists; the results go into a "
+                           "folder", hint="name a new or an existing folder")
     out_dir.mkdir(parents=True, exist_ok=True)
     say = (lambda *a: None) if (args.quiet or args.json) else print
     progress = not (args.quiet or args.json or args.no_progress) and sys.stderr.isatty()

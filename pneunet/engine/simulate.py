@@ -12,7 +12,7 @@ import time as _time
 import numpy as np
 
 from .assembly import CircuitDAE
-from ..errors import SolverError
+from ..errors import ParameterError, SolverError
 from .solution import LazySignals, OperatingPoint, Solution
 from .solvers import available_backends
 from .solvers.base import EVENT, FAILED, Segment
@@ -97,6 +97,12 @@ def transient(circuit, t_stop: float, *, t_step: float | None = None, t_start: f
         raise SolverError(f"t_stop ({t_stop} s) must be after t_start ({t_start} s)")
     if t_step is not None and not 0 < t_step <= t_stop - t_start:
         raise SolverError(f"t_step must lie in (0, {t_stop - t_start}] s, got {t_step}")
+    if t_step is not None and (t_stop - t_start) / t_step > MAX_OUTPUT_POINTS:
+        raise ParameterError(f"t_step {t_step:g} s over {t_stop - t_start:g} s asks for "
+                          f"{(t_stop - t_start) / t_step:.3g} output points (limit "
+                          f"MAX_OUTPUT_POINTS = {MAX_OUTPUT_POINTS:.0e})",
+                          hint="a larger output step: the integrator's own steps do not "
+                               "depend on it")
     wall = _time.perf_counter()
     dae = CircuitDAE(circuit)
     opts = circuit.options
@@ -198,6 +204,8 @@ def transient(circuit, t_stop: float, *, t_step: float | None = None, t_start: f
     return _build_solution(dae, times, states, stats, tuple(record.jumps))
 
 
+#: output points a transient may ask for (8 bytes per point and unknown)
+MAX_OUTPUT_POINTS = 10_000_000
 STEP_STORE_LIMIT = 512  # unknowns up to which internal steps are stored and interpolated
 
 

@@ -92,3 +92,18 @@ def test_a_node_with_one_connection_is_warned_with_a_did_you_mean(capsys, tmp_pa
     for shipped in sorted((Path(__file__).parents[2] / "netlists").glob("*.pn")):
         assert main(["check", str(shipped)]) == 0
         assert "warning" not in capsys.readouterr().err, shipped
+
+
+def test_output_file_in_the_way_and_absurd_output_grid_exit_2(capsys, tmp_path):
+    """``-o`` naming an existing file, and ``.tran 1e-9 30s`` (3·10¹⁰ output points): exit 2
+    with what to change, no traceback and no allocation attempt."""
+    net = tmp_path / "n.pn"
+    net.write_text("P1 a 200kPa\nR1 a atm 1\nV1 a 10mL\n.tran 10ms 0.1s\n")
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    assert main(["run", str(net), "-o", str(blocker), "-q"]) == 2
+    assert "a file of that name exists" in capsys.readouterr().err
+    net.write_text("P1 a 200kPa\nR1 a atm 1\nV1 a 10mL\n.tran 1e-9 30s\n")
+    assert main(["run", str(net), "-o", str(tmp_path / "out"), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert "MAX_OUTPUT_POINTS" in err and "Traceback" not in err
