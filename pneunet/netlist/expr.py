@@ -73,6 +73,11 @@ def evaluate(text: str, scope: Scope, span: SourceSpan, column: int | None = Non
         raise NetlistError("empty expression {}", span=_shift(span, 1, base))
     try:
         tree = lark_parser().parse(text, start="expr")
+        return _Evaluator(scope, span, base).eval(tree)
+    except RecursionError:
+        raise NetlistError("expression nested too deeply (more levels than Python's "
+                           "recursion limit)", span=_shift(span, 1, base),
+                           hint="split it into .param steps") from None
     except UnexpectedInput as err:
         col = getattr(err, "column", 1)
         tok = getattr(err, "token", None)
@@ -82,7 +87,6 @@ def evaluate(text: str, scope: Scope, span: SourceSpan, column: int | None = Non
             f"{tok.value!r}" if tok is not None else repr(text[col - 1:col] or "end")
         raise NetlistError(f"syntax error in expression {{{text}}}: unexpected {what}",
                            span=_shift(span, col, base)) from None
-    return _Evaluator(scope, span, base).eval(tree)
 
 
 class _Evaluator:
