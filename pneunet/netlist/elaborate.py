@@ -45,6 +45,10 @@ def _err(msg, item_or_span, hint=None):
     return NetlistError(msg, span=span, hint=hint)
 
 
+#: subcircuit instances nested inside each other, at most
+MAX_SUBCKT_DEPTH = 50
+
+
 def _close(word, choices):
     m = difflib.get_close_matches(word, list(choices), n=1, cutoff=0.6)
     return f"did you mean {m[0]!r}?" if m else None
@@ -609,6 +613,9 @@ class _Builder:
             loop = " -> ".join(stack + [sub.name.lower()])
             raise _err(f"recursive subcircuit: {loop}", sub_word,
                        "a subcircuit cannot contain an instance of itself")
+        if len(stack) >= MAX_SUBCKT_DEPTH:
+            raise _err(f"subcircuits nested {len(stack) + 1} deep (limit MAX_SUBCKT_DEPTH = "
+                       f"{MAX_SUBCKT_DEPTH})", sub_word, "flatten some levels")
         nodes = positional[:-1]
         if len(nodes) != len(sub.ports):
             raise _err(f"subcircuit {sub.name} has {len(sub.ports)} port(s) "
