@@ -72,37 +72,46 @@ class ThermalVolume(ElementFamily):
         self._p_ref = np.where(np.isnan(p0), opts.ambient, p0)
         self._t_wall = opts.temperature
 
-    def _terms(self, p, pdot):
+    def _storage(self, p, pdot, partials=False):
+        """Wall heat H and mass storage M = d/dt(p·V·M/(R·T)) (mg/s, see above) of the
+        gas (u = p, w = θ), and with ``partials`` their derivatives: H by (u, w), M by
+        (u, w, u̇, ẇ)."""
         u, w = p[..., 0], p[..., 1]
         ud, wd = pdot[..., 0], pdot[..., 1]
-        c, tau, g, pr = self._c, self._tau, self._gamma, self._p_ref
-        heat = c * (u / w) ** self._scaling * (pr - w) / tau
-        s = c * ud - heat
-        k = np.where(s >= 0, 1.0, pr / w)  # T_w / T_up
-        q = k * s / g
-        mass = c * pr * (ud / w - u * wd / w ** 2)
-        return u, w, ud, wd, s, k, q, mass
+        c, pr = self._c, self._p_ref
+        ratio = (u / w) ** self._scaling
+        heat = c * ratio * (pr - w) / self._tau
+        cp = c * pr
+        mass = cp * (ud / w - u * wd / w ** 2)
+        if not partials:
+            return heat, mass, None, None
+        sc = self._scaling
+        d_heat = (sc * heat / u, -c * ratio / self._tau - sc * heat / w)
+        d_mass = (-cp * wd / w ** 2, cp * (-ud / w ** 2 + 2 * u * wd / w ** 3), cp / w,
+                  -cp * u / w ** 2)
+        return heat, mass, d_heat, d_mass
+
+    def _inflow(self, p, pdot, heat):
+        """s = C·ṗ − H, T_w/T_up and the mass inflow q = (T_w/T_up)·s/γ (mg/s)."""
+        s = self._c * pdot[..., 0] - heat
+        k = np.where(s >= 0, 1.0, self._p_ref / p[..., 1])  # T_w / T_up
+        return s, k, k * s / self._gamma
 
     def flows(self, t, p, pdot):
-        *_, q, mass = self._terms(p, pdot)
+        heat, mass, _, _ = self._storage(p, pdot)
+        q = self._inflow(p, pdot, heat)[2]
         return np.stack([q, q - mass], axis=-1)
 
     def outflows(self, t, p, pdot):
-        u, w, ud, wd, s, k, q, mass = self._terms(p, pdot)
-        c, tau, g, pr = self._c, self._tau, self._gamma, self._p_ref
-        sc = self._scaling
-        ratio = (u / w) ** sc
-        heat = c * ratio * (pr - w) / tau
-        dheat_du = sc * heat / u
-        dheat_dw = -c * ratio / tau - sc * heat / w
+        heat, mass, (dh_du, dh_dw), (dm_du, dm_dw, dm_dud, dm_dwd) = \
+            self._storage(p, pdot, partials=True)
+        s, k, q = self._inflow(p, pdot, heat)
+        g, w = self._gamma, p[..., 1]
         # q = k·s/γ; k depends on w only where s < 0
-        dk_dw = np.where(s >= 0, 0.0, -pr / w ** 2)
-        dq_du = -k * dheat_du / g
-        dq_dw = (-k * dheat_dw + dk_dw * s) / g
-        dq_dud = k * c / g
-        cp = c * pr
-        dm_du, dm_dw = -cp * wd / w ** 2, cp * (-ud / w ** 2 + 2 * u * wd / w ** 3)
-        dm_dud, dm_dwd = cp / w, -cp * u / w ** 2
+        dk_dw = np.where(s >= 0, 0.0, -self._p_ref / w ** 2)
+        dq_du = -k * dh_du / g
+        dq_dw = (-k * dh_dw + dk_dw * s) / g
+        dq_dud = k * self._c / g
         n = self.n
         dq_dp = np.zeros((n, 2, 2))
         dq_dpdot = np.zeros((n, 2, 2))
@@ -139,35 +148,23 @@ class ThermalChamber(ThermalVolume):
     description = ("rigid gas volume with energy balance and wall heat transfer, fed "
                    "through thermal_inlet elements (one per line)")
 
-    def _balances(self, p, pdot):
-        """Energy storage E = (C·ṗ − H)/γ and mass storage M (mg/s), with pieces."""
-        u, w = p[..., 0], p[..., 1]
-        ud, wd = pdot[..., 0], pdot[..., 1]
-        c, tau, g, pr = self._c, self._tau, self._gamma, self._p_ref
-        ratio = (u / w) ** self._scaling
-        heat = c * ratio * (pr - w) / tau
-        energy = (c * ud - heat) / g
-        mass = c * pr * (ud / w - u * wd / w ** 2)
-        return u, w, ud, wd, ratio, heat, energy, mass
-
     def flows(self, t, p, pdot):
-        *_, energy, mass = self._balances(p, pdot)
+        heat, mass, _, _ = self._storage(p, pdot)
+        energy = (self._c * pdot[..., 0] - heat) / self._gamma
         return np.stack([energy, -mass], axis=-1)
 
     def outflows(self, t, p, pdot):
-        u, w, ud, wd, ratio, heat, energy, mass = self._balances(p, pdot)
-        c, tau, g, pr, sc = self._c, self._tau, self._gamma, self._p_ref, self._scaling
-        dheat_du = sc * heat / u
-        dheat_dw = -c * ratio / tau - sc * heat / w
-        cp = c * pr
+        heat, mass, (dh_du, dh_dw), (dm_du, dm_dw, dm_dud, dm_dwd) = \
+            self._storage(p, pdot, partials=True)
+        g = self._gamma
+        energy = (self._c * pdot[..., 0] - heat) / g
         n = self.n
         dq_dp = np.zeros((n, 2, 2))
         dq_dpdot = np.zeros((n, 2, 2))
-        dq_dp[:, 0, 0], dq_dp[:, 0, 1] = -dheat_du / g, -dheat_dw / g
-        dq_dp[:, 1, 0] = cp * wd / w ** 2
-        dq_dp[:, 1, 1] = -cp * (-ud / w ** 2 + 2 * u * wd / w ** 3)
-        dq_dpdot[:, 0, 0] = c / g
-        dq_dpdot[:, 1, 0], dq_dpdot[:, 1, 1] = -cp / w, cp * u / w ** 2
+        dq_dp[:, 0, 0], dq_dp[:, 0, 1] = -dh_du / g, -dh_dw / g
+        dq_dp[:, 1, 0], dq_dp[:, 1, 1] = -dm_du, -dm_dw
+        dq_dpdot[:, 0, 0] = self._c / g
+        dq_dpdot[:, 1, 0], dq_dpdot[:, 1, 1] = -dm_dud, -dm_dwd
         return np.stack([energy, -mass], axis=-1), dq_dp, dq_dpdot
 
 
