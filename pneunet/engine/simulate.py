@@ -99,10 +99,10 @@ def transient(circuit, t_stop: float, *, t_step: float | None = None, t_start: f
         raise SolverError(f"t_step must lie in (0, {t_stop - t_start}] s, got {t_step}")
     if t_step is not None and (t_stop - t_start) / t_step > MAX_OUTPUT_POINTS:
         raise ParameterError(f"t_step {t_step:g} s over {t_stop - t_start:g} s asks for "
-                          f"{(t_stop - t_start) / t_step:.3g} output points (limit "
-                          f"MAX_OUTPUT_POINTS = {MAX_OUTPUT_POINTS:.0e})",
-                          hint="a larger output step: the integrator's own steps do not "
-                               "depend on it")
+                             f"{(t_stop - t_start) / t_step:.3g} output points (limit "
+                             f"MAX_OUTPUT_POINTS = {MAX_OUTPUT_POINTS:.0e})",
+                             hint="a larger output step: the integrator's own steps do "
+                                  "not depend on it")
     wall = _time.perf_counter()
     dae = CircuitDAE(circuit)
     opts = circuit.options
