@@ -104,6 +104,12 @@ class ElementFamily:
         self.n = len(specs)
 
     @classmethod
+    def passing_flow(cls, n_nodes: int) -> list[int]:
+        """Indices of the ports that pass flow, for an instance with ``n_nodes`` nodes."""
+        return [k for k in (cls.flow_ports if cls.flow_ports is not None else range(n_nodes))
+                if k < n_nodes]
+
+    @classmethod
     def check_spec(cls, spec: ElementSpec) -> None:
         """Checks across parameters (single values are checked by :class:`Param`)."""
 

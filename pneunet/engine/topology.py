@@ -38,7 +38,7 @@ def check_topology(circuit) -> None:
                     "reference nodes 0/gnd/atm are already at ambient pressure")
             pinned[node] = spec.name
         storage.update(spec.nodes[p] for p in family.storage_ports)
-        ports = family.flow_ports if family.flow_ports is not None else range(len(spec.nodes))
+        ports = family.passing_flow(len(spec.nodes))
         flow_nodes = [spec.nodes[p] for p in ports]
         touched_by_flow.update(flow_nodes)
         flow_edges += zip(flow_nodes, flow_nodes[1:])

@@ -145,9 +145,8 @@ def _lines_at(circuit, node):
 
     out = []
     for s in circuit.elements.values():
-        fam = elements.family(s.kind)
-        ports = fam.flow_ports if fam.flow_ports is not None else range(len(s.nodes))
-        out += [(s, k) for k in ports if k < len(s.nodes) and s.nodes[k] == node]
+        out += [(s, k) for k in elements.family(s.kind).passing_flow(len(s.nodes))
+                 if s.nodes[k] == node]
     return out
 
 
