@@ -28,7 +28,9 @@ from ..errors import ParameterError
 GRID_POINTS = (5, 3, 2)
 #: a tube at a port of these is a dead volume inside a series resistance: the same
 #: physics as a dead volume at a node plus a refitted resistance, so not offered there
-SERIES_KINDS = ("resistor", "pipe")
+#: (a thermal_inlet is a zero-resistance link into a chamber: a tube there is a tube at
+#: the line it joins)
+SERIES_KINDS = ("resistor", "pipe", "thermal_inlet")
 
 
 class CircuitEffect(ABC):
