@@ -131,3 +131,23 @@ def test_physics_outside_the_library_is_unexplained(name):
     assert j["waterfall"][0]["held_out_rms"] > 1.5 * j["noise_floor"]
     assert all(r["held_out_rms"] is None or r["held_out_rms"] > 1.5 * j["noise_floor"]
                for r in j["ranking"])
+
+
+@pytest.mark.slow
+def test_a_candidate_whose_fit_fails_is_reported_not_a_crash(monkeypatch):
+    """A candidate fit that cannot simulate the whole record (SolverError) is a failed
+    candidate with the solver's message; the diagnosis still gives its verdict."""
+    from pneunet.errors import SolverError
+    from pneunet.traces import diagnosis as module
+    from pneunet.traces.effects import DeadVolume
+
+    def failing(*args, **kwargs):
+        raise SolverError("IDA stopped at t = 10 s", time=10.0)
+
+    monkeypatch.setattr(module, "_fit_effects", failing)
+    d = diagnose_trace(oscillator, oscillator_record(12.0, noise=0.4, seed=1, V_out=1.5),
+                       PARAMS, node="tank", effects=[DeadVolume("out")])
+    j = d.to_json()
+    assert j["verdict"] == "unexplained" and j["accepted"] == []
+    row = next(r for r in j["ranking"] if r["effect"] == "dead_volume@out")
+    assert row["held_out_rms"] is None and row["note"].startswith("fit failed: IDA stopped")
