@@ -17,15 +17,23 @@ class SourceSpan:
     line: int
     column: int
     text: str = ""  # the offending source line, for the caret display
+    via: tuple = ()  # the .include lines ("top.pn:3") through which the file was read
 
     def __str__(self) -> str:
         return f"{self.file}:{self.line}:{self.column}"
 
-    def caret(self) -> str:
-        """The source line with a caret under the column, or '' without text."""
+    def caret(self, width: int = 120) -> str:
+        """The source line (a window of ``width`` characters around a long line's column)
+        with a caret under the column, or '' without text."""
         if not self.text:
             return ""
-        return f"    {self.text.rstrip()}\n    {' ' * (self.column - 1)}^"
+        text, column = self.text.rstrip(), self.column
+        if len(text) > width:
+            start = max(0, min(column - 1 - width // 2, len(text) - width))
+            text = ("…" if start else "") + text[start:start + width] + \
+                ("…" if start + width < len(text) else "")
+            column = column - start + (1 if start else 0)
+        return f"    {text}\n    {' ' * (column - 1)}^"
 
 
 class PneunetError(Exception):
@@ -58,6 +66,8 @@ class PneunetError(Exception):
         lines = [head]
         if self.span is not None and self.span.caret():
             lines.append(self.span.caret())
+        for where in self.span.via if self.span is not None else ():
+            lines.append(f"  included from {where}")
         if self.hint:
             lines.append(f"hint: {self.hint}")
         return "\n".join(lines)

@@ -1,6 +1,8 @@
 """``pneunet check FILE.pn``: parse and validate a netlist, print a summary."""
 from __future__ import annotations
 
+from . import netlist_args
+
 
 def register(subparsers) -> None:
     p = subparsers.add_parser(
@@ -9,19 +11,16 @@ def register(subparsers) -> None:
                     "parameter ranges, subcircuits, includes and the circuit's topology. "
                     "Exit code 0 if it is fine, 2 with file:line:column and a caret if not.")
     p.add_argument("netlist", metavar="FILE.pn", help="netlist file")
+    netlist_args.add(p)
     p.set_defaults(func=main)
 
 
 def main(args) -> int:
-    import sys
-
-    from ..engine.topology import dangling_nodes
     from ..netlist import parse_file
 
-    deck = parse_file(args.netlist)
+    deck = parse_file(args.netlist, **netlist_args.parse_options(args))
     deck.circuit.validate()
-    for warning in dangling_nodes(deck.circuit):
-        print(f"warning: {warning}", file=sys.stderr)
+    netlist_args.check_nodes(deck.circuit, args.strict)
     print(f"{args.netlist}: ok")
     print(deck.circuit.summary())
     analyses = ", ".join(f".{a.kind}" for a in deck.analyses) or "none"

@@ -5,6 +5,8 @@ import json
 import sys
 from pathlib import Path
 
+from . import netlist_args
+
 
 def register(subparsers) -> None:
     p = subparsers.add_parser(
@@ -22,6 +24,7 @@ def register(subparsers) -> None:
                    help="print measurements and written files as JSON on stdout")
     p.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    netlist_args.add(p)
     p.set_defaults(func=main)
 
 
@@ -51,16 +54,14 @@ def _column_names(result) -> list[str]:
 
 def main(args) -> int:
     from ..errors import SolverError
-    from ..engine.topology import dangling_nodes
     from ..netlist import parse_file
     from ..netlist.runner import RunResult, evaluate_measures, measure_unit, run_analysis
     from ..engine.solution import write_csv
 
     path = Path(args.netlist)
-    deck = parse_file(path)
+    deck = parse_file(path, **netlist_args.parse_options(args))
     deck.circuit.validate()
-    for warning in dangling_nodes(deck.circuit):
-        print(f"warning: {warning}", file=sys.stderr)
+    netlist_args.check_nodes(deck.circuit, args.strict)
     points = deck.step_points()
     out_dir = Path(args.output) if args.output else Path.cwd() / f"{path.stem}_results"
     if out_dir.exists() and not out_dir.is_dir():

@@ -16,21 +16,42 @@ from pathlib import Path
 from .deck import DC, Deck, Measure, Op, Signal, Step, Tran
 
 
-def parse_netlist(text: str, name: str = "<netlist>", overrides: dict | None = None) -> Deck:
-    """Parse netlist text; ``.include`` paths are relative to ``name``'s folder (or the cwd)."""
-    from .elaborate import elaborate, load
+def parse_netlist(text: str, name: str = "<netlist>", overrides: dict | None = None, *,
+                  limits=None, include_path=()) -> Deck:
+    """Parse netlist text; ``.include`` paths are relative to ``name``'s folder (or the cwd).
+
+    ``limits`` is a :class:`~.limits.Limits` or a mapping of limits to change
+    (``{"max_elements": 2_000_000}``); ``include_path`` adds folders includes may come from.
+    """
     from .syntax import parse_text
 
+    limits = _limits(limits)
     path = Path(name) if name != "<netlist>" else None
-    return elaborate(load(parse_text(text, name, path)), overrides)
+    return _build(parse_text(text, name, path, limits=limits), path, overrides, limits,
+                  include_path)
 
 
-def parse_file(path, overrides: dict | None = None) -> Deck:
-    """Parse a netlist file."""
-    from .elaborate import elaborate, load
+def parse_file(path, overrides: dict | None = None, *, limits=None, include_path=()) -> Deck:
+    """Parse a netlist file (``limits`` and ``include_path`` as for :func:`parse_netlist`)."""
     from .syntax import read_source
 
-    return elaborate(load(read_source(Path(path))), overrides)
+    limits = _limits(limits)
+    return _build(read_source(Path(path), limits=limits), Path(path), overrides, limits,
+                  include_path)
+
+
+def _limits(limits):
+    from .limits import DEFAULT, Limits
+
+    return limits if isinstance(limits, Limits) else DEFAULT.replace(limits or {})
+
+
+def _build(src, path, overrides, limits, include_path) -> Deck:
+    from .elaborate import elaborate, load
+    from .includes import IncludePolicy
+
+    policy = IncludePolicy.for_netlist(path, include_path)
+    return elaborate(load(src, policy, limits), overrides)
 
 
 def print_circuit(circuit, **kw) -> str:

@@ -14,11 +14,13 @@ from pathlib import Path
 from ..errors import NetlistError, PneunetError, SourceSpan
 from .deck import DC, Deck, Measure, Op, Signal, Step, Tran
 from .expr import Scope, evaluate
-from .syntax import Call, Group, Pair, SourceText, Statement, Str, Word, read_source
+from .includes import KEYWORDS as INCLUDE_KEYWORDS, IncludePolicy, expand
+from .limits import DEFAULT as DEFAULT_LIMITS, Limits
+from .syntax import Call, Group, Pair, SourceText, Statement, Str, Word
 from .values import convert, number_in_expression, set_expression_ambient, split
 
 REFERENCE = ("0", "gnd", "atm")
-DIRECTIVES = (".param", ".subckt", ".ends", ".include", ".inc", ".model", ".ic", ".options",
+DIRECTIVES = (".param", ".subckt", ".ends", *INCLUDE_KEYWORDS, ".model", ".ic", ".options",
               ".option", ".tran", ".op", ".dc", ".step", ".meas", ".measure", ".save", ".print",
               ".title", ".end")
 
@@ -41,12 +43,11 @@ _BRACES = re.compile(r"\{[^{}]*\}")
 
 
 def _err(msg, item_or_span, hint=None):
+    """A NetlistError at an item; a message quoting a long word is cut (the caret shows it)."""
     span = item_or_span if isinstance(item_or_span, SourceSpan) else item_or_span.span
+    if len(msg) > 300:
+        msg = msg[:299] + "…"
     return NetlistError(msg, span=span, hint=hint)
-
-
-#: subcircuit instances nested inside each other, at most
-MAX_SUBCKT_DEPTH = 50
 
 
 def _close(word, choices):
@@ -72,11 +73,15 @@ class Source:
     title: str
     top: list
     subckts: dict = field(default_factory=dict)
+    limits: Limits = DEFAULT_LIMITS
 
 
-def load(src: SourceText) -> Source:
-    """Expand ``.include`` (relative to the including file) and collect ``.subckt`` blocks."""
-    statements = list(_expand_includes(src, [Path(src.name).resolve()] if src.name != "<netlist>" else []))
+def load(src: SourceText, policy: IncludePolicy | None = None,
+         limits: Limits = DEFAULT_LIMITS) -> Source:
+    """Expand ``.include`` (see :mod:`.includes`) and collect ``.subckt`` blocks."""
+    if policy is None:
+        policy = IncludePolicy.for_netlist(Path(src.name) if src.name != "<netlist>" else None)
+    statements = list(expand(src, policy, limits))
     title = src.title
     top, subckts, stack = [], {}, []
     for st in statements:
@@ -127,25 +132,7 @@ def load(src: SourceText) -> Source:
             top.append(st)
     if stack:
         raise _err(f".subckt {stack[-1].name} has no .ends", stack[-1].span)
-    return Source(src.name, title, top, subckts)
-
-
-def _expand_includes(src: SourceText, chain: list):
-    for st in src.statements:
-        if st.is_directive and st.keyword in (".include", ".inc"):
-            if len(st.items) != 2 or not isinstance(st.items[1], (Word, Str)):
-                raise _err(".include needs one file name", st.span, 'e.g. .include "valves.pn"')
-            base = Path(src.name).resolve().parent if src.name != "<netlist>" else Path.cwd()
-            target = (base / st.items[1].text).resolve()
-            if target in chain:
-                loop = " -> ".join(p.name for p in chain + [target])
-                raise _err(f"recursive .include: {loop}", st.items[1])
-            if not target.is_file():
-                raise _err(f"cannot find included file {st.items[1].text!r}", st.items[1],
-                           f"paths are relative to the including file ({base})")
-            yield from _expand_includes(read_source(target), chain + [target])
-        else:
-            yield st
+    return Source(src.name, title, top, subckts, limits)
 
 
 # -- elaboration -------------------------------------------------------------------------
@@ -156,6 +143,8 @@ def elaborate(source: Source, overrides: dict | None = None) -> Deck:
 class _Builder:
     def __init__(self, source: Source, overrides: dict):
         self.source = source
+        self.limits = source.limits
+        self.kind_words = _kind_keywords()  # once per netlist, not per element
         self.overrides = dict(overrides)
         self.models: dict[str, object] = {}
         self.model_spans: dict[str, SourceSpan] = {}
@@ -403,7 +392,7 @@ class _Builder:
         rest = st.items[1:]
         kind_kw = head.text.lower()
         family = None
-        if len(rest) >= 1 and len(kind_kw) > 1 and kind_kw in _kind_keywords():
+        if len(rest) >= 1 and len(kind_kw) > 1 and kind_kw in self.kind_words:
             family = elements.family(kind_kw)
             name_item = rest[0]
             if not isinstance(name_item, Word):
@@ -613,9 +602,10 @@ class _Builder:
             loop = " -> ".join(stack + [sub.name.lower()])
             raise _err(f"recursive subcircuit: {loop}", sub_word,
                        "a subcircuit cannot contain an instance of itself")
-        if len(stack) >= MAX_SUBCKT_DEPTH:
-            raise _err(f"subcircuits nested {len(stack) + 1} deep (limit MAX_SUBCKT_DEPTH = "
-                       f"{MAX_SUBCKT_DEPTH})", sub_word, "flatten some levels")
+        if len(stack) >= self.limits.max_subckt_depth:
+            raise _err(f"subcircuits nested {len(stack) + 1} deep "
+                       f"({self.limits.exceeded('max_subckt_depth')})", sub_word,
+                       "flatten some levels; " + self.limits.hint("max_subckt_depth"))
         nodes = positional[:-1]
         if len(nodes) != len(sub.ports):
             raise _err(f"subcircuit {sub.name} has {len(sub.ports)} port(s) "

@@ -130,12 +130,25 @@ def blank_comments(text: str) -> tuple[str, str]:
     return "\n".join(out), title
 
 
-def parse_text(text: str, name: str = "<netlist>", path: Path | None = None) -> SourceText:
-    """Parse netlist text into statements (no meaning attached yet)."""
+def parse_text(text: str, name: str = "<netlist>", path: Path | None = None, *,
+               limits=None, via: tuple = ()) -> SourceText:
+    """Parse netlist text into statements (no meaning attached yet); ``via`` names the
+    ``.include`` lines through which the file was reached, for error messages."""
     from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken
 
+    from .limits import DEFAULT
+
+    limits = limits or DEFAULT
+    _span = functools.partial(_span_in, via=via)
     text = text.replace("\t", " ")
     lines = text.split("\n")
+    for number, line in enumerate(lines, 1):
+        if len(line) > limits.max_line_length:
+            raise NetlistError(f"line of {len(line)} characters is too long "
+                               f"({limits.exceeded('max_line_length')})",
+                               span=_span(name, lines, number, limits.max_line_length + 1),
+                               hint="split it with '+' continuation lines; "
+                                    + limits.hint("max_line_length"))
     clean, title = blank_comments(text)
     first = clean.lstrip(" \n\r")
     if first.startswith("+"):
@@ -174,41 +187,38 @@ def parse_text(text: str, name: str = "<netlist>", path: Path | None = None) -> 
         raise NetlistError(msg, span=_span(name, lines, line, column), hint=hint) from None
     src = SourceText(name, lines, title=title)
     for st in tree.children:
-        items = [_item(child, name, lines) for child in st.children]
+        items = [_item(child, name, lines, _span) for child in st.children]
         src.statements.append(Statement(items, items[0].span, path))
     return src
 
 
-def _span(name, lines, line, column) -> SourceSpan:
+def _span_in(name, lines, line, column, via=()) -> SourceSpan:
     text = lines[line - 1] if 1 <= line <= len(lines) else ""
-    return SourceSpan(name, line, max(column, 1), text)
+    return SourceSpan(name, line, max(column, 1), text, via)
 
 
-def _item(node, name, lines) -> Item:
-    from lark import Token
-
-    if isinstance(node, Token):  # pragma: no cover (rules wrap tokens)
-        return Word(_span(name, lines, node.line, node.column), str(node))
+def _item(node, name, lines, span_of) -> Item:
     kind = node.data
-    span = _span(name, lines, node.meta.line, node.meta.column)
+    span = span_of(name, lines, node.meta.line, node.meta.column)
     if kind == "word":
         return Word(span, str(node.children[0]))
     if kind == "string":
         return Str(span, str(node.children[0])[1:-1])
     if kind == "pair":
-        return Pair(span, _item(node.children[0], name, lines), _item(node.children[1], name, lines))
+        return Pair(span, _item(node.children[0], name, lines, span_of),
+                    _item(node.children[1], name, lines, span_of))
     if kind in ("call", "group"):
         children = list(node.children)
         head = str(children.pop(0)) if kind == "call" else None
         args = []
         for ch in children:
             if getattr(ch, "data", None) == "args":
-                args = [_item(a, name, lines) for a in ch.children]
+                args = [_item(a, name, lines, span_of) for a in ch.children]
         return Call(span, head, args) if kind == "call" else Group(span, args)
     raise AssertionError(kind)  # pragma: no cover
 
 
-def read_source(path: Path) -> SourceText:
+def read_source(path: Path, *, limits=None, via: tuple = ()) -> SourceText:
     """The parsed netlist file: UTF-8, with or without a byte-order mark."""
     try:
         raw = path.read_bytes()
@@ -220,6 +230,6 @@ def read_source(path: Path) -> SourceText:
         line = raw.count(b"\n", 0, exc.start) + 1
         column = exc.start - (raw.rfind(b"\n", 0, exc.start) + 1) + 1
         raise NetlistError(f"byte 0x{raw[exc.start]:02x} is not UTF-8 text",
-                           span=SourceSpan(str(path), line, column),
+                           span=SourceSpan(str(path), line, column, via=via),
                            hint="save the netlist as UTF-8 (netlists are plain text)") from None
-    return parse_text(text, str(path), path)
+    return parse_text(text, str(path), path, limits=limits, via=via)

@@ -1,0 +1,41 @@
+"""Options shared by every command that reads a netlist: ``--include-path``, ``--limit``,
+``--strict``."""
+from __future__ import annotations
+
+import sys
+
+
+def add(parser, strict: bool = True) -> None:
+    """Add the netlist-reading options to a sub-command's parser."""
+    parser.add_argument("--include-path", action="append", default=[], metavar="DIR",
+                        help="a folder .include may also read from (repeatable; also "
+                             "PNEUNET_PATH); by default only the netlist's own folder")
+    parser.add_argument("--limit", action="append", default=[], metavar="NAME=N",
+                        help="change a netlist limit, e.g. --limit max_elements=2000000 "
+                             "(names and defaults: docs/netlist.md, 'Limits')")
+    if strict:
+        parser.add_argument("--strict", action="store_true",
+                            help="a node with a single connection is an error, not a warning")
+
+
+def parse_options(args) -> dict:
+    """``parse_file`` keyword arguments from the options (an unknown limit is exit 2)."""
+    from ..netlist.limits import DEFAULT
+
+    return {"limits": DEFAULT.replace(args.limit), "include_path": tuple(args.include_path)}
+
+
+def check_nodes(circuit, strict: bool) -> None:
+    """Warn on stderr about nodes with a single connection; with ``strict`` the first is an
+    error (exit 2)."""
+    from ..engine.topology import dangling_nodes
+    from ..errors import TopologyError
+
+    warnings = dangling_nodes(circuit)
+    if strict and warnings:
+        where, _, rest = warnings[0].rpartition(": node ")
+        raise TopologyError("node " + rest, where=where or None,
+                            hint="connect the node, or fix its spelling (without --strict "
+                                 "this is a warning)")
+    for warning in warnings:
+        print(f"warning: {warning}", file=sys.stderr)

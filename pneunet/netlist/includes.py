@@ -1,0 +1,109 @@
+"""``.include`` / ``.lib``: where an included file may come from, checked before it is opened.
+
+A name is resolved relative to the including file, then in each folder of the search path
+(``--include-path``, then ``PNEUNET_PATH``).  After symbolic links are resolved, the file must
+lie under the top netlist's folder or a search-path folder and be a regular file; absolute
+names, over-long names and files elsewhere are errors at the ``.include`` line.
+"""
+from __future__ import annotations
+
+import os
+import stat
+from dataclasses import dataclass
+from pathlib import Path
+
+from ..errors import NetlistError
+from .limits import DEFAULT, Limits
+from .syntax import SourceText, Str, Word, read_source
+
+KEYWORDS = (".include", ".inc", ".lib")
+#: characters in an include name, at most (a longer name is refused before any lookup)
+MAX_NAME = 1024
+
+
+@dataclass(frozen=True)
+class IncludePolicy:
+    """The folders whose files a netlist may include (resolved, symbolic links followed)."""
+
+    roots: tuple
+
+    @classmethod
+    def for_netlist(cls, top: Path | None, include_path=()) -> "IncludePolicy":
+        """The top netlist's folder (the cwd for text), ``include_path``, then ``PNEUNET_PATH``."""
+        home = Path(os.path.realpath(top)).parent if top is not None else Path.cwd().resolve()
+        extra = [*include_path, *filter(None, os.environ.get("PNEUNET_PATH", "").split(os.pathsep))]
+        return cls((home, *(Path(os.path.realpath(p)) for p in extra)))
+
+    def allows(self, path: Path) -> bool:
+        return any(path == root or path.is_relative_to(root) for root in self.roots)
+
+    def resolve(self, item, base: Path) -> Path:
+        """The file ``item`` names, found from ``base`` (the including file's folder) or the
+        search path; an error at ``item`` if the policy forbids it.  Nothing is opened."""
+        name = item.text
+        rule = "includes must stay under " + " or ".join(str(r) for r in self.roots)
+        if len(name) > MAX_NAME or any(len(part) > 255 for part in name.split("/")):
+            raise NetlistError(f"include name of {len(name)} characters is too long", span=item.span,
+                               hint=f"at most {MAX_NAME} characters, 255 per folder name")
+        if "\0" in name or not name.strip():
+            raise NetlistError(f"{name!r} is not a file name", span=item.span)
+        if os.path.isabs(name) or name.startswith("~"):
+            raise NetlistError(f"absolute include path {_short(name)!r} is not allowed", span=item.span,
+                               hint="write it relative to the including file, or add its folder "
+                                    "with --include-path or PNEUNET_PATH")
+        refused = None
+        for folder in (base, *self.roots[1:]):
+            path = Path(os.path.realpath(folder / name))
+            if not self.allows(path):
+                refused = refused or path
+                continue
+            try:
+                mode = os.stat(path).st_mode
+            except OSError:
+                continue
+            if stat.S_ISDIR(mode):
+                raise NetlistError(f"included {_short(name)!r} is a folder, not a file", span=item.span)
+            if not stat.S_ISREG(mode):
+                raise NetlistError(f"included {_short(name)!r} is not a regular file (a device, "
+                                   "pipe or socket)", span=item.span)
+            return path
+        if refused is not None:
+            raise NetlistError(f"include {_short(name)!r} leads outside the allowed folders "
+                               f"(to {_short(str(refused))})", span=item.span,
+                               hint=rule + "; add a folder with --include-path or PNEUNET_PATH")
+        raise NetlistError(f"cannot find included file {_short(name)!r}", span=item.span,
+                           hint=f"paths are relative to the including file ({base})" +
+                           (", then the search path" if len(self.roots) > 1 else ""))
+
+
+def _short(text: str, width: int = 80) -> str:
+    return text if len(text) <= width else text[:width - 1] + "…"
+
+
+def expand(src: SourceText, policy: IncludePolicy, limits: Limits = DEFAULT,
+           chain: tuple = ()):
+    """The statements of ``src`` with each ``.include`` replaced by the included file's."""
+    for st in src.statements:
+        if not (st.is_directive and st.keyword in KEYWORDS):
+            yield st
+            continue
+        if len(st.items) != 2 or not isinstance(st.items[1], (Word, Str)):
+            hint = ".lib sections are not supported; .lib FILE includes the whole file" \
+                if st.keyword == ".lib" and len(st.items) == 3 else 'e.g. .include "valves.pn"'
+            raise NetlistError(f"{st.head} needs one file name", span=st.span, hint=hint)
+        item = st.items[1]
+        if len(chain) >= limits.max_include_depth:
+            raise NetlistError(f"includes nested {len(chain) + 1} deep "
+                               f"({limits.exceeded('max_include_depth')})", span=item.span,
+                               hint=limits.hint("max_include_depth"))
+        base = Path(os.path.realpath(src.name)).parent if src.name != "<netlist>" \
+            else policy.roots[0]
+        target = policy.resolve(item, base)
+        files = [Path(os.path.realpath(src.name))] if src.name != "<netlist>" else []
+        files += [path for path, _ in chain]
+        if target in files:
+            loop = " -> ".join(p.name for p in [*reversed(files), target])
+            raise NetlistError(f"recursive .include: {loop}", span=item.span)
+        via = (str(st.span).rsplit(":", 1)[0], *item.span.via)
+        yield from expand(read_source(target, via=via), policy, limits,
+                          ((target, st.span), *chain))

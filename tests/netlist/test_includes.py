@@ -1,0 +1,142 @@
+"""The include policy: files outside the netlist's folder and the search path are refused at
+the .include line before they are opened; errors in included files name the include chain."""
+import os
+import sys
+from pathlib import Path
+
+import pytest
+
+from pneunet.cli import main
+from pneunet.errors import NetlistError
+from pneunet.netlist import parse_file
+
+OPENED: list = []  # paths opened while WATCHING is set (an audit hook cannot be removed)
+WATCHING = []
+
+
+def _audit(event, args):
+    if WATCHING and event == "open" and args and isinstance(args[0], (str, bytes, os.PathLike)):
+        OPENED.append(os.path.realpath(os.fsdecode(args[0])))
+
+
+sys.addaudithook(_audit)
+
+
+#: where imports come from (modules imported lazily on the error path are opened too)
+CODE = tuple(os.path.realpath(p) + os.sep for p in
+             {sys.prefix, sys.base_prefix, *(p for p in sys.path if p and os.path.isdir(p))})
+
+
+def opened_while(fn):
+    """The data files ``fn()`` opens, imports left out (Python's "open" audit event covers
+    open, io.open, os.open and Path.open/read_*)."""
+    OPENED.clear()
+    WATCHING.append(True)
+    try:
+        fn()
+    finally:
+        WATCHING.clear()
+        OPENED[:] = [p for p in OPENED if not p.startswith(CODE)]
+    return list(OPENED)
+
+
+LONG = "a" * 5000
+HOSTILE = {  # include name -> expected message fragment
+    "/etc/passwd": "absolute include path '/etc/passwd' is not allowed",
+    "/etc/hostname": "absolute include path '/etc/hostname' is not allowed",
+    "/proc/self/environ": "absolute include path '/proc/self/environ' is not allowed",
+    "/dev/zero": "absolute include path '/dev/zero' is not allowed",
+    "../../../../../../etc/passwd": "leads outside the allowed folders (to /etc/passwd)",
+    "../../../../../../proc/self/environ": "leads outside the allowed folders",
+    "link_passwd.pn": "leads outside the allowed folders (to /etc/passwd)",
+    "link_out/x.pn": "leads outside the allowed folders",
+    "lib": "included 'lib' is a folder, not a file",
+    LONG: "include name of 5000 characters is too long",
+    "~/.bashrc": "absolute include path '~/.bashrc' is not allowed",
+}
+
+
+@pytest.fixture
+def project(tmp_path):
+    top = tmp_path / "project"
+    (top / "lib").mkdir(parents=True)
+    (tmp_path / "outside").mkdir()
+    (tmp_path / "outside" / "x.pn").write_text("R9 a atm 1\n")
+    (top / "link_passwd.pn").symlink_to("/etc/passwd")
+    (top / "link_out").symlink_to(tmp_path / "outside")
+    return top
+
+
+@pytest.mark.parametrize("name", list(HOSTILE), ids=lambda n: n[:30])
+def test_hostile_include_is_refused_before_it_is_opened(project, name, capsys):
+    net = project / "top.pn"
+    net.write_text(f'P1 a 200kPa\nR1 a atm 1\n.include "{name}"\nV1 a 10mL\n')
+    with pytest.raises(NetlistError) as info:
+        opened = opened_while(lambda: parse_file(net))
+    opened = list(OPENED)
+    err = info.value
+    assert (err.span.line, err.span.column) == (3, 10)
+    assert HOSTILE[name] in err.message, err.message
+    assert opened == [os.path.realpath(net)]  # the netlist itself, nothing else
+    assert main(["check", str(net)]) == 2
+    out = capsys.readouterr().err
+    assert "Traceback" not in out and "root:" not in out and len(out) < 1000
+
+
+def test_device_and_fifo_in_the_project_are_refused_unopened(project):
+    os.mkfifo(project / "pipe.pn")
+    (project / "dev.pn").symlink_to("/dev/zero")
+    (project / "top.pn").write_text('.include "pipe.pn"\n')
+    with pytest.raises(NetlistError, match="not a regular file"):
+        opened_while(lambda: parse_file(project / "top.pn"))
+    assert OPENED == [os.path.realpath(project / "top.pn")]
+
+
+def test_search_path_and_pneunet_path_widen_the_roots(project, monkeypatch, capsys):
+    shared = project.parent / "outside"
+    net = project / "top.pn"
+    net.write_text('P1 a 200kPa\nR1 a atm 1\nV1 a 10mL\n.include "x.pn"\n')
+    with pytest.raises(NetlistError, match="cannot find included file 'x.pn'"):
+        parse_file(net)
+    assert "R9" in parse_file(net, include_path=[shared]).circuit.elements
+    assert main(["check", str(net), "--include-path", str(shared)]) == 0
+    monkeypatch.setenv("PNEUNET_PATH", str(shared))
+    assert "R9" in parse_file(net).circuit.elements
+    # a path through the search folder still may not climb out of it
+    net.write_text('.include "../outside/x.pn"\n')
+    monkeypatch.delenv("PNEUNET_PATH")
+    with pytest.raises(NetlistError, match="leads outside"):
+        parse_file(net)
+
+
+def test_error_in_an_included_file_names_file_line_and_chain(project):
+    (project / "lib" / "b.pn").write_text("* b\nR9 a b 1 foo=2\n")
+    (project / "lib" / "a.pn").write_text('.include "b.pn"\n')
+    (project / "top.pn").write_text('P1 a 200kPa\n.include "lib/a.pn"\n')
+    with pytest.raises(NetlistError) as info:
+        parse_file(project / "top.pn")
+    err = info.value
+    assert (Path(err.span.file).name, err.span.line, err.span.column) == ("b.pn", 2, 10)
+    report = err.report()
+    assert f"included from {project / 'lib' / 'a.pn'}:1" in report
+    assert f"included from {project / 'top.pn'}:2" in report
+
+
+def test_include_depth_is_a_named_limit(project):
+    for i in range(5):
+        (project / f"n{i}.pn").write_text(f'.include "n{i + 1}.pn"\n')
+    (project / "n5.pn").write_text("R1 a atm 1\n")
+    parse_file(project / "n0.pn")
+    with pytest.raises(NetlistError) as info:
+        parse_file(project / "n0.pn", limits={"max_include_depth": 3})
+    assert "includes nested 4 deep (limit max_include_depth = 3)" in info.value.message
+    assert info.value.span.file.endswith("n3.pn")  # its include of n4 is the 4th level
+
+
+def test_lib_is_an_include(project):
+    (project / "v.pn").write_text(".model fast VALVE(axi Rf=0.3)\n")
+    (project / "top.pn").write_text('.lib "v.pn"\nP1 a 200kPa\nX1 a atm atm fast\n')
+    assert parse_file(project / "top.pn").circuit.elements["X1"].kind == "valve"
+    (project / "top.pn").write_text('.lib "v.pn" typical\n')
+    with pytest.raises(NetlistError, match=".lib needs one file name"):
+        parse_file(project / "top.pn")
