@@ -249,7 +249,8 @@ class _Builder:
         """A value without a slot: expression, number with scale factor or unit, or a name."""
         text = word.text
         if text.startswith("{") and text.endswith("}") and _BRACES.fullmatch(text):
-            return evaluate(text[1:-1], scope, word.span, word.span.column + 1)
+            return evaluate(text[1:-1], scope, word.span, word.span.column + 1,
+                            limits=self.limits)
         text = self._subst(word, scope)
         if split(text) is not None:
             return number_in_expression(text, word.span, self.options.ambient)
@@ -262,7 +263,8 @@ class _Builder:
     def _subst(self, word: Word, scope) -> str:
         """Replace each {expr} inside a word by its value."""
         def repl(m):
-            value = evaluate(m.group(0)[1:-1], scope, word.span, word.span.column + m.start() + 1)
+            column = word.span.column + m.start() + 1
+            value = evaluate(m.group(0)[1:-1], scope, word.span, column, self.limits)
             return _fmt_int(value)
         return _BRACES.sub(repl, word.text)
 
@@ -272,7 +274,8 @@ class _Builder:
             raise _err(f"{name} expects a number, got {word}", word)
         text = word.text
         if text.startswith("{") and text.endswith("}") and _BRACES.fullmatch(text):
-            return evaluate(text[1:-1], scope, word.span, word.span.column + 1)
+            return evaluate(text[1:-1], scope, word.span, word.span.column + 1,
+                            limits=self.limits)
         text = self._subst(word, scope)
         if split(text) is None:
             value = scope.lookup(text)

@@ -62,10 +62,13 @@ def _shift(span: SourceSpan, meta_column: int, base_column: int) -> SourceSpan:
     return SourceSpan(span.file, span.line, base_column + meta_column - 1, span.text)
 
 
-def evaluate(text: str, scope: Scope, span: SourceSpan, column: int | None = None) -> float:
-    """Evaluate expression ``text`` whose first character is at ``column`` of ``span``'s line."""
+def evaluate(text: str, scope: Scope, span: SourceSpan, column: int | None = None,
+             limits=None) -> float:
+    """Evaluate expression ``text`` whose first character is at ``column`` of ``span``'s line
+    (nested at most ``limits.max_expression_depth`` deep)."""
     from lark.exceptions import UnexpectedInput
 
+    from .limits import DEFAULT
     from .syntax import lark_parser
 
     base = span.column if column is None else column
@@ -73,7 +76,7 @@ def evaluate(text: str, scope: Scope, span: SourceSpan, column: int | None = Non
         raise NetlistError("empty expression {}", span=_shift(span, 1, base))
     try:
         tree = lark_parser().parse(text, start="expr")
-        return _Evaluator(scope, span, base).eval(tree)
+        return _Evaluator(scope, span, base, limits or DEFAULT).eval(tree)
     except RecursionError:
         raise NetlistError("expression nested too deeply (more levels than Python's "
                            "recursion limit)", span=_shift(span, 1, base),
@@ -90,8 +93,9 @@ def evaluate(text: str, scope: Scope, span: SourceSpan, column: int | None = Non
 
 
 class _Evaluator:
-    def __init__(self, scope, span, base):
-        self.scope, self.span, self.base = scope, span, base
+    def __init__(self, scope, span, base, limits):
+        self.scope, self.span, self.base, self.limits = scope, span, base, limits
+        self.depth = 0
 
     def where(self, node) -> SourceSpan:
         meta = getattr(node, "meta", None)
@@ -105,8 +109,16 @@ class _Evaluator:
 
         if isinstance(node, Token):  # a bare expression that is one token
             return self.token(node)
-        method = getattr(self, "r_" + node.data)
-        return method(node)
+        if self.depth >= self.limits.max_expression_depth:
+            raise NetlistError(f"expression nested more than {self.depth} deep "
+                               f"({self.limits.exceeded('max_expression_depth')})",
+                               span=self.where(node), hint="split it into .param steps; "
+                               + self.limits.hint("max_expression_depth"))
+        self.depth += 1
+        try:
+            return getattr(self, "r_" + node.data)(node)
+        finally:
+            self.depth -= 1
 
     def token(self, tok):
         if tok.type == "NUMBER":
