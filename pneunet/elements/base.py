@@ -28,6 +28,10 @@ import numpy as np
 
 from ..errors import ParameterError, SourceSpan
 
+#: up to this many instances a family may evaluate its law instance by instance on
+#: Python floats (:class:`pneunet.laws.Scalar`): faster than numpy on tiny arrays
+FEW_INSTANCES = 8
+
 
 @dataclass(frozen=True)
 class Param:

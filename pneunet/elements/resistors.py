@@ -4,9 +4,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..gas import GAS_CONSTANT
-from ..laws import quadrature_flow
+from ..laws import Scalar, quadrature_flow
 from . import register
-from .base import ElementFamily, Param
+from .base import FEW_INSTANCES, ElementFamily, Param
 
 
 def pipe_resistance(length_mm, diameter_mm, friction, temperature_k, molar_mass_g_mol):
@@ -28,16 +28,25 @@ class _QuadratureFamily(ElementFamily):
 
     ports = ("a", "b")
 
+    def _law(self, p, partials):
+        """(ṁ, ∂ṁ/∂p_a, ∂ṁ/∂p_b) for pressures p (..., n, 2); few instances on floats."""
+        band = self.context.options.flow_band
+        if p.ndim == 2 and self.n <= FEW_INSTANCES:
+            out = [quadrature_flow(p_a, p_b, r, band, partials, xp=Scalar)
+                   for (p_a, p_b), r in zip(p.tolist(), self._r.tolist())]
+            if not partials:
+                return np.array([mdot for mdot, _, _ in out]), None, None
+            return np.array(out).T
+        return quadrature_flow(p[..., 0], p[..., 1], self._r, band, partials)
+
     def outflows(self, t, p, pdot):
-        mdot, d_a, d_b = quadrature_flow(p[:, 0], p[:, 1], self._r,
-                                         self.context.options.flow_band)
+        mdot, d_a, d_b = self._law(p, partials=True)
         grad = np.empty((self.n, 1, 2))
         grad[:, 0, 0], grad[:, 0, 1] = d_a, d_b
         return mdot[:, None] * _OUT_IN, _OUT_IN[:, None] * grad, None
 
     def flows(self, t, p, pdot):
-        mdot, _, _ = quadrature_flow(p[..., 0], p[..., 1], self._r,
-                                     self.context.options.flow_band, partials=False)
+        mdot, _, _ = self._law(p, partials=False)
         return mdot[..., None] * _OUT_IN
 
     def signals(self, t, p):

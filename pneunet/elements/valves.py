@@ -14,11 +14,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..laws import valve_delta_p, valve_flow_and_partials, valve_opening
+from ..laws import Scalar, valve_delta_p, valve_flow_and_partials, valve_opening
 from ..errors import ParameterError
 from ..valve_params import ValveParams, resolve_valve_model
 from . import register
-from .base import ElementFamily, Param
+from .base import FEW_INSTANCES, ElementFamily, Param
 
 _FD_STEP_KPA = 1e-4
 _PORTS = np.array([1.0, -1.0, 0.0])  # flow in→out leaves node in, enters out; none at ctrl
@@ -69,8 +69,15 @@ class MembraneValve(ElementFamily):
         for i, m in enumerate(models):
             if not self._analytic[i]:
                 self._custom.setdefault(id(m), (m, []))[1].append(i)
+        # few valves: each one's (forward, backward) parameters as floats (laws.Scalar)
+        self._rows = None
+        if self.n <= FEW_INSTANCES:
+            both = self._both or (np.array(list(self._fwd.values())),) * 2
+            self._rows = list(zip(both[0].T.tolist(), both[1].T.tolist()))
 
     def _analytic_flow(self, p, partials=True):
+        if self._rows is not None and p.ndim == 2:
+            return self._scalar_flow(p, partials)
         if self._both is None:
             params = self._fwd.values()
         else:  # each valve's parameters for its flow direction: (6, ..., n)
@@ -78,6 +85,17 @@ class MembraneValve(ElementFamily):
             params = np.moveaxis(np.where(forward, *self._both), -2, 0)
         return valve_flow_and_partials(p[..., 0], p[..., 1], p[..., 2], *params,
                                        band=self.context.options.flow_band, partials=partials)
+
+    def _scalar_flow(self, p, partials):
+        """:meth:`_analytic_flow` valve by valve on Python floats (p: (n, 3))."""
+        band = self.context.options.flow_band
+        out = [valve_flow_and_partials(p_in, p_out, p_ctrl, *(fwd if p_in >= p_out else bwd),
+                                       band=band, partials=partials, xp=Scalar)
+               for (p_in, p_out, p_ctrl), (fwd, bwd) in zip(p.tolist(), self._rows)]
+        if not partials:
+            return np.array([mdot for mdot, _ in out]), None
+        table = np.array([(mdot, *grad) for mdot, grad in out]).T
+        return table[0], (table[1], table[2], table[3])
 
     def outflows(self, t, p, pdot):
         mdot, (d_in, d_out, d_ctrl) = self._analytic_flow(p)
