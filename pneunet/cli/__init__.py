@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import sys
+import warnings
 
 #: sub-command modules, in the order ``pneunet --help`` lists them
 SUBCOMMAND_MODULES = ("run", "check", "fit", "diagnose", "sweep", "branches", "fit_trace")
@@ -45,13 +46,32 @@ def main(argv: list[str] | None = None) -> int:
         parser.print_help()
         return 2
     try:
-        return int(args.func(args) or 0)
+        with warnings.catch_warnings():
+            _show_solver_warnings(quiet=getattr(args, "quiet", False))
+            return int(args.func(args) or 0)
     except PneunetError as err:
         print(err.report(), file=sys.stderr)
         return err.exit_code
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130
+
+
+def _show_solver_warnings(quiet: bool) -> None:
+    """The integrator's warnings as ``warning: …`` lines on stderr; none with -q."""
+    from ..engine.diagnostics import SolverWarning
+
+    if quiet:
+        warnings.simplefilter("ignore", SolverWarning)
+        return
+    default = warnings.showwarning
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        if issubclass(category, SolverWarning):
+            print(f"warning: {message}", file=sys.stderr)
+        else:
+            default(message, category, filename, lineno, file, line)
+    warnings.showwarning = show
 
 
 if __name__ == "__main__":

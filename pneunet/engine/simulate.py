@@ -12,6 +12,7 @@ import time as _time
 import numpy as np
 
 from .assembly import CircuitDAE
+from .diagnostics import captured
 from ..errors import ParameterError, SolverError
 from .solution import LazySignals, OperatingPoint, Solution
 from .solvers import available_backends
@@ -76,6 +77,7 @@ def operating_point(circuit, *, t: float = 0.0) -> OperatingPoint:
     return OperatingPoint(pressures, flows, result.residual)
 
 
+@captured
 def transient(circuit, t_stop: float, *, t_step: float | None = None, t_start: float = 0.0,
               start: str = "ic", backend: str | None = None, progress: bool = False) -> Solution:
     """Simulate from ``t_start`` to ``t_stop`` (s).
@@ -294,10 +296,10 @@ class _Watch:
 def _progress(enabled, t0, t1):
     if not enabled:
         return None
-    from tqdm.auto import tqdm
+    from ..progress import progress_bar
 
-    return tqdm(total=t1 - t0, unit="s", desc="transient",
-                bar_format="{l_bar}{bar}| {n:.3g}/{total:.3g} s [{elapsed}<{remaining}]")
+    return progress_bar(total=t1 - t0, unit="s", desc="transient",
+                        bar_format="{l_bar}{bar}| {n:.3g}/{total:.3g} s [{elapsed}<{remaining}]")
 
 
 def _failure(dae, seg, t, y, record, integrator):

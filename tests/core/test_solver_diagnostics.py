@@ -1,0 +1,98 @@
+"""SUNDIALS output is captured, parsed into pneunet warnings and counted, never printed raw."""
+import json
+import re
+import warnings
+
+import pytest
+
+from pneunet.engine import diagnostics
+from pneunet.engine.diagnostics import SolverWarning, parse
+from pneunet.errors import SolverError
+from pneunet.paper_circuits import oscillator
+
+RAW = ("[WARNING]", "[rank 0]", "Error: -", "ida_ls.c", "feedstock")
+
+WARNING_LINE = ("[WARNING][rank 0][/home/conda/feedstock_root/build/sundials/src/ida/ida_ls.c:1687]"
+                "[idaLsPerf] Warning: at t = 2.0025, poor iterative algorithm performance.\n")
+HANDLER_LINE = "\n[IDAHandleFailure, Error: -4] At t = 1.5, corrector convergence failed repeatedly\n\n"
+
+
+def assert_no_raw_sundials(text):
+    assert not [word for word in RAW if word in text], text[:500]
+
+
+@pytest.fixture(autouse=True)
+def fresh_announcements(monkeypatch):
+    """Each test sees the first warning of each kind (they are shown once per process)."""
+    monkeypatch.setattr(diagnostics, "_announced", set())
+
+
+def test_parse_takes_kind_time_and_text_without_build_path_and_keeps_other_output():
+    messages, rest = parse("user output\n" + WARNING_LINE + HANDLER_LINE)
+    assert [(m.kind, m.time) for m in messages] == [("idaLsPerf", 2.0025),
+                                                    ("IDAHandleFailure -4", 1.5)]
+    assert messages[0].text.startswith("at t = 2.0025, poor iterative")
+    assert rest == "user output\n"
+
+
+def test_recovered_solver_failures_are_one_warning_counted_in_stats_and_never_raw(capfd):
+    # the fold indicator turned almost off: IDA's corrector fails at each fold, the
+    # driver restarts it with small steps and finishes
+    circuit = oscillator(fold_threshold=1e-8)
+    with pytest.warns(SolverWarning) as caught:
+        sol = circuit.tran(6.0)
+    out, err = capfd.readouterr()
+    assert_no_raw_sundials(out + err)
+    assert sol.stats["solver_messages"] >= 1
+    kinds = sol.stats["solver_diagnostics"]["kinds"]
+    assert "IDAHandleFailure -4" in kinds and sol.stats["solver_diagnostics"]["recovered"]
+    texts = [str(w.message) for w in caught]
+    assert len(texts) == 1 and "recovered" in texts[0] and re.search(r"t = \d", texts[0])
+    with warnings.catch_warnings():  # the same kind again: counted, not shown again
+        warnings.simplefilter("error", SolverWarning)
+        assert circuit.tran(6.0).stats["solver_messages"] >= 1
+
+
+def test_a_solve_that_stops_carries_its_messages_and_says_the_result_ends(capfd):
+    circuit = oscillator(flow_band=1e-6, rtol=1e-2, atol=10.0)
+    with pytest.warns(SolverWarning, match="stopped"), pytest.raises(SolverError) as info:
+        circuit.tran(5.0)
+    assert_no_raw_sundials("".join(capfd.readouterr()))
+    assert info.value.diagnostics.recovered is False
+    assert info.value.diagnostics.as_data()["count"] >= 1
+
+
+def test_clean_runs_count_zero_messages(capfd):
+    sol = oscillator().tran(2.0)
+    assert sol.stats["solver_messages"] == 0 and "solver_diagnostics" not in sol.stats
+    assert capfd.readouterr() == ("", "")
+
+
+def test_other_output_during_a_solve_is_written_back(capfd, monkeypatch):
+    from pneunet.engine import simulate
+
+    real = simulate.consistent_state
+
+    def chatty(*args, **kwargs):
+        print("from python")
+        return real(*args, **kwargs)
+    monkeypatch.setattr(simulate, "consistent_state", chatty)
+    oscillator().tran(0.5)
+    assert "from python" in capfd.readouterr().out
+
+
+def test_cli_run_json_reports_the_messages_as_data_and_q_silences_them(tmp_path, capfd):
+    from pneunet.cli import main
+
+    netlist = tmp_path / "osc.pn"
+    netlist.write_text(".options fold_threshold=1e-8\n.param Rf=0.566\nPH supply 496kPa\n"
+                       "X1 supply out tank axi_0p6mm\nRout out tank {2*Rf}kPa*s/mg\n"
+                       "Vtank tank 200mL\nRvent tank atm 3kPa*s/mg\n.tran 10ms 6s\n")
+    assert main(["run", str(netlist), "-o", str(tmp_path / "a"), "--json"]) == 0
+    out, err = capfd.readouterr()
+    assert_no_raw_sundials(out + err)
+    report = json.loads(out)
+    assert report["solver_messages"]["tran"]["count"] >= 1
+    assert "warning: IDA IDAHandleFailure -4" in err
+    assert main(["run", str(netlist), "-o", str(tmp_path / "b"), "-q"]) == 0
+    assert capfd.readouterr() == ("", "")
