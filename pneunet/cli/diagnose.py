@@ -4,6 +4,8 @@ from __future__ import annotations
 import json
 import sys
 
+from ..csvdata import BENCH_MAX_ROWS
+
 
 def register(subparsers):
     p = subparsers.add_parser(
@@ -29,6 +31,9 @@ def register(subparsers):
     p.add_argument("--ambient", type=float, metavar="KPA",
                    help="barometric pressure for gauge data (with --gauge)")
     p.add_argument("--gauge", action="store_true", help="pressures in the file are gauge")
+    p.add_argument("--max-rows", type=int, default=BENCH_MAX_ROWS, metavar="N",
+                   help=f"read at most N data rows; a longer file is thinned evenly with a "
+                        f"notice (default {BENCH_MAX_ROWS})")
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     p.set_defaults(func=run)
 
@@ -53,15 +58,18 @@ def _load_plugin(spec):
 
 def run(args) -> int:
     from ..diagnose import diagnose
+    from ..identify import load_measurements
 
-    for spec in args.plugin:
-        _load_plugin(spec)
-    load = {}
+    load = {"max_rows": args.max_rows}
     if args.gauge:
         load.update(gauge=True, ambient_kpa=args.ambient)
-    diag = diagnose(args.data, effects=args.effects, n_splits=args.folds,
-                    max_effects=args.max_effects, progress=not args.no_progress,
-                    load_options=load)
+    data = load_measurements(args.data, **load)  # the data checked before any work
+    for note in data.notes:
+        print(f"pneunet diagnose: note: {note}", file=sys.stderr)
+    for spec in args.plugin:
+        _load_plugin(spec)
+    diag = diagnose(data, effects=args.effects, n_splits=args.folds,
+                    max_effects=args.max_effects, progress=not args.no_progress)
     if args.plots:
         diag.plots(args.plots)
     if args.model_out:

@@ -5,6 +5,7 @@ import json
 import sys
 
 from ..errors import DataError
+from ..csvdata import BENCH_MAX_ROWS
 
 
 def register(subparsers) -> None:
@@ -29,6 +30,9 @@ def register(subparsers) -> None:
     p.add_argument("--exclude-invalid", action="store_true",
                    help="drop invalid rows (NaN, p_in <= p_out, duplicates...) with a report "
                         "instead of stopping")
+    p.add_argument("--max-rows", type=int, default=BENCH_MAX_ROWS, metavar="N",
+                   help=f"read at most N data rows; a longer file is thinned evenly with a "
+                        f"notice (default {BENCH_MAX_ROWS})")
     p.add_argument("--mdot-min", default="1", metavar="X|auto",
                    help="open/closed flow threshold in mg/s, or 'auto' from the closed-point "
                         "noise (default 1, the paper's)")
@@ -73,7 +77,9 @@ def run(args) -> int:
     data = load_measurements(args.data, ambient_kpa=args.ambient, gauge=args.gauge,
                              units=units or None, columns=columns or None, flow_bias=bias,
                              on_invalid="exclude" if args.exclude_invalid else "raise",
-                             valve=args.valve)
+                             valve=args.valve, max_rows=args.max_rows)
+    for note in data.notes:
+        print(f"pneunet fit: note: {note}", file=sys.stderr)
     fit = fit_valve(data, mdot_min=mdot_min, C=args.C, correct_threshold=not args.paper,
                     n_boot=args.bootstrap)
     card = fit.model_card(args.name)

@@ -488,7 +488,9 @@ def format_report(diag: Diagnosis) -> str:
     L.append("[[Diagnosis: valve model vs measurement]]")
     L.append(f"    data points       = {j['n']} in {j['n_sweeps']} sweeps "
              f"({diag.settings['n_splits']}-fold CV grouped by sweep)")
-    L.append(f"    noise floor       = {j['noise_floor']:.3g} mg/s (estimated from the data)")
+    L.append("    noise floor       = " + (
+        f"{j['noise_floor']:.3g} mg/s (estimated from the data)" if j["noise_floor"] is not None
+        else "not estimated (fewer than 30 points inside sweeps of 3 or more)"))
     verdict = {"adequate": "ADEQUATE: nothing missing that the data can show",
                "explained": "EXPLAINED: the accepted effects bring the held-out error to the "
                             "noise floor",

@@ -11,13 +11,13 @@ are dropped and listed in :attr:`Measurements.excluded` — never silently.
 """
 from __future__ import annotations
 
-import io
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
+from ..csvdata import BENCH_MAX_ROWS, column_unit, missing_column, open_csv
 from ..errors import DataError, ParameterError
 
 PRESSURES = ("p_in_kPa", "p_out_kPa", "p_ctrl_kPa")
@@ -64,30 +64,15 @@ def _rows_text(rows, limit=12) -> str:
     return text + (f", … ({len(rows) - limit} more)" if len(rows) > limit else "")
 
 
-def _read_csv(path: Path):
-    """CSV with '#' comment lines; returns (frame, file line number of each data row)."""
-    try:
-        text = path.read_text(encoding="utf-8-sig")
-    except FileNotFoundError:
-        raise DataError(f"no such file: {path}") from None
-    except UnicodeDecodeError as exc:
-        raise DataError(f"{path} is not UTF-8 text ({exc})",
-                        hint="save the file as UTF-8 CSV") from None
-    kept, line_numbers = [], []
-    for number, line in enumerate(text.splitlines(), start=1):
-        if not line.strip() or line.lstrip().startswith("#"):
-            continue
-        kept.append(line)
-        line_numbers.append(number)
-    if not kept:
-        raise DataError(f"{path} holds no header row and no data")
-    try:
-        frame = pd.read_csv(io.StringIO("\n".join(kept)), skipinitialspace=True)
-    except pd.errors.ParserError as exc:
-        raise DataError(f"{path}: cannot parse as CSV: {exc}",
-                        hint="comma-separated, '#' comments, one header row") from None
-    frame.columns = [str(c).strip() for c in frame.columns]
-    return frame, np.asarray(line_numbers[1:], dtype=int)
+#: limits of plausible bench values (canonical units): beyond them a cell is a
+#: logging error (1e308, a sensor's overflow code), not a measurement
+MAX_PRESSURE_KPA = 1e5
+MAX_FLOW_MG_S = 1e7
+#: fewest valid rows a fit or diagnosis can use (a few sweeps)
+MIN_ROWS = 20
+#: default cap on the rows read from a file; longer files are thinned evenly with a
+#: notice (``max_rows``, CLI ``--max-rows``)
+DEFAULT_MAX_ROWS = BENCH_MAX_ROWS
 
 
 def _unit_for(column: str, units: dict) -> str | None:
@@ -103,9 +88,174 @@ def _unit_for(column: str, units: dict) -> str | None:
     return None
 
 
+def _resolve_columns(names, source, columns, units, notes) -> tuple[dict, set]:
+    """Renames {file name: canonical} for the column mapping and for canonical stems
+    with another unit (``p_in_bar``, ``p_in_kpa``, ``mdot_g_s``, ``time_ms``: the unit
+    goes into ``units``); the gauge columns; DataError for a missing column."""
+    rename, gauge_cols = {}, set()
+    for old, new in (columns or {}).items():
+        if old not in names:
+            raise DataError(f"{source}: the column mapping names {old}, which is not in the "
+                            f"data", hint=f"columns found: {', '.join(map(str, names))}")
+        rename[old] = new
+    present = {rename.get(n, n) for n in names}
+    for name in names:
+        if name in rename or not isinstance(name, str):
+            continue
+        try:
+            cu = column_unit(name)
+        except DataError as err:
+            raise DataError(f"{source}: {err.message}", hint=err.hint) from None
+        if cu is None or cu.canonical not in REQUIRED or cu.canonical in present \
+                or (cu.is_canonical and name == cu.canonical):
+            continue
+        rename[name] = cu.canonical
+        present.add(cu.canonical)
+        units.setdefault(cu.canonical, cu.pint_unit)
+        if cu.gauge:
+            gauge_cols.add(cu.canonical)
+        notes.append(f"column {name} read as {cu.canonical} (unit {cu.pint_unit}"
+                     f"{', gauge' if cu.gauge else ''})")
+    for c in REQUIRED:
+        if c not in present:
+            raise missing_column(source, c, names, taken=present & set(REQUIRED),
+                                 hint="rename it or pass a column mapping (columns={'Pin': "
+                                      "'p_in_kPa'}, CLI --map Pin=p_in_kPa)")
+    return rename, gauge_cols
+
+
+def _numeric(frame, source) -> None:
+    """Number columns of a DataFrame given by the caller as float (a file's are already)."""
+    for column in REQUIRED + tuple(c for c in ("sweep", "h_seat_mm", "T_K") if c in frame):
+        values = pd.to_numeric(frame[column], errors="coerce")
+        bad = values.isna() & frame[column].notna()
+        if bad.any():
+            rows = frame.loc[bad, "row"].to_numpy()
+            raise DataError(f"{source}: column {column} holds text that is not a number in "
+                            f"row(s) {_rows_text(rows)} (e.g. {frame.loc[bad, column].iloc[0]!r})",
+                            hint="use '.' as decimal point and only numbers in data columns")
+        frame[column] = values.astype(float)
+
+
+def _convert_units(frame, source, units, gauge, gauge_cols, ambient_kpa) -> None:
+    from ..units import to_internal
+
+    if (gauge or gauge_cols) and ambient_kpa is None:
+        what = "gauge pressures" if gauge else f"the gauge column(s) {', '.join(sorted(gauge_cols))}"
+        raise DataError(f"{source}: {what} need the ambient (barometric) pressure",
+                        hint="pass ambient_kpa (CLI --ambient), e.g. 96 kPa at 480 m as in "
+                             "the paper, 101.325 kPa at sea level")
+    try:
+        for column in PRESSURES:
+            frame[column] = to_internal(frame[column].to_numpy(), _unit_for(column, units) or "kPa",
+                                        "pressure", gauge=gauge or column in gauge_cols,
+                                        ambient_kpa=ambient_kpa or 0.0, name=column)
+        for column, slot in (("mdot_mg_s", "flow"), ("time_s", "time")):
+            unit = _unit_for(column, units)
+            if unit:
+                frame[column] = to_internal(frame[column].to_numpy(), unit, slot, name=column)
+    except ParameterError as exc:
+        raise DataError(f"{source}: {exc.message}", hint=exc.hint) from None
+
+
+def _row_problems(frame):
+    """(mask, reason) for each kind of invalid row, each row under its first reason."""
+    problems = []
+    invalid = np.zeros(len(frame), bool)
+
+    def add(mask, reason):
+        nonlocal invalid
+        mask = np.asarray(mask, bool) & ~invalid
+        problems.append((mask, reason))
+        invalid |= mask
+
+    for column in REQUIRED:
+        values = frame[column].to_numpy(float)
+        add(np.isnan(values), f"NaN in {column}")
+        add(np.isinf(values), f"inf in {column}")
+    for column in PRESSURES:
+        add((frame[column] <= 0).to_numpy(), f"negative absolute pressure in {column}")
+        add((frame[column] > MAX_PRESSURE_KPA).to_numpy(),
+            f"implausible pressure in {column} (over {MAX_PRESSURE_KPA:g} kPa)")
+    add((frame["mdot_mg_s"].abs() > MAX_FLOW_MG_S).to_numpy(),
+        f"implausible flow in mdot_mg_s (over {MAX_FLOW_MG_S:g} mg/s)")
+    add((frame["p_in_kPa"] <= frame["p_out_kPa"]).to_numpy(),
+        "p_in <= p_out (no forward pressure difference)")
+    add(frame.duplicated(subset=[c for c in frame.columns if c not in ("row", "line")],
+                         keep="first").to_numpy(), "duplicate of an earlier row")
+    times = frame["time_s"].to_numpy(float)
+    add(pd.Series(np.where(invalid, np.nan, times)).duplicated(keep="first").to_numpy()
+        & ~np.isnan(times), "repeated time stamp")
+    return problems
+
+
+_HINTS = {"p_in ": "the input port must be the higher-pressure port; swap the columns for "
+                   "backward flow, or exclude these rows",
+          "dupli": "remove the repeated rows",
+          "repea": "each held point needs its own time stamp; remove or fix the repeated ones",
+          "NaN i": "fill the gaps",
+          "inf i": "an infinite value is a logging error; fix or remove these rows",
+          "impla": "a logging error or a wrong unit (--pressure-unit, --flow-unit)",
+          "negat": "check the sensor or the units; gauge data needs --gauge"}
+
+
+def _exclude(frame, source, lines, on_invalid):
+    """Frame without the invalid rows and the excluded rows with their reason (or a
+    DataError naming the rows and file lines of the first kind of invalid row)."""
+    parts, drop = [], np.zeros(len(frame), bool)
+    for mask, reason in _row_problems(frame):
+        if not mask.any():
+            continue
+        rows = frame.loc[mask, "row"].to_numpy()
+        where = _rows_text(rows)
+        if lines:
+            where += " (file lines " + _rows_text(frame.loc[mask, "line"].to_numpy()) + ")"
+        if on_invalid == "raise":
+            raise DataError(f"{source}: {mask.sum()} row(s) with {reason}: data row(s) {where}",
+                            hint=_HINTS[reason[:5]] + "; or pass on_invalid='exclude' (CLI "
+                                 "--exclude-invalid) to drop them with a report")
+        part = frame.loc[mask].copy()
+        part["reason"] = reason
+        parts.append(part)
+        drop |= mask
+    excluded = (pd.concat(parts, ignore_index=True) if parts
+                else pd.DataFrame(columns=list(frame.columns) + ["reason"]))
+    return frame.loc[~drop], excluded
+
+
+def _time_order(frame, source, notes):
+    """Rows in time order: a file written backwards is reversed with a notice; any
+    other step back in time is a DataError at its line."""
+    t = frame["time_s"].to_numpy(float)
+    step = np.diff(t)
+    if not len(step) or np.all(step > 0):
+        return frame
+    if np.all(step < 0):
+        notes.append("rows are in reverse time order: reversed (the order defines the sweeps)")
+        return frame.iloc[::-1]
+    i = int(np.flatnonzero(step <= 0)[0])
+    at = frame.iloc[i + 1]
+    where = f"line {int(at['line'])}" if "line" in frame else f"data row {int(at['row'])}"
+    raise DataError(f"{source}: column time_s goes back at {where} (t = {t[i + 1]:g} s after "
+                    f"{t[i]:g} s)", hint="sort the rows by time_s; a file joining several runs "
+                                         "needs times that continue from run to run")
+
+
+def _read_file(path, columns, units, notes, max_rows):
+    """A bench CSV read with its columns checked first; (frame, renames, gauge columns)."""
+    csv_file = open_csv(path)
+    rename, gauge_cols = _resolve_columns(csv_file.columns, csv_file.source, columns, units,
+                                          notes)
+    numeric = [old for old, new in rename.items() if new in REQUIRED] + [
+        c for c in csv_file.columns if c in REQUIRED + ("sweep", "h_seat_mm", "T_K")]
+    table = csv_file.read(numeric, max_rows=max_rows, what="data rows")
+    notes.extend(table.notes)
+    return table.frame.rename(columns=rename), gauge_cols
+
+
 def load_measurements(path_or_df, *, ambient_kpa=None, gauge=False, units=None, columns=None,
                       flow_bias=None, on_invalid="raise", valve=None,
-                      check_gauge=True) -> Measurements:
+                      check_gauge=True, max_rows=DEFAULT_MAX_ROWS) -> Measurements:
     """Load bench data into canonical units and check it.
 
     Parameters
@@ -120,47 +270,57 @@ def load_measurements(path_or_df, *, ambient_kpa=None, gauge=False, units=None, 
         Units of columns not in canonical units, by canonical column name
         (``{"p_in_kPa": "bar"}``), by stem (``{"p_in": "bar"}``) or by kind
         (``{"pressure": "psi", "flow": "L/min"}``; a volume flow means normal litres).
+        A file column named with another unit (``p_in_bar``, ``mdot_g_s``) is read in it.
     columns : dict
         Column mapping ``{"name in file": "canonical name"}``.
     flow_bias : None, "min" or float
         Flow-sensor bias removal: ``"min"`` subtracts the smallest reading (the
         paper's method), a number subtracts that many mg/s, None leaves the flow.
     on_invalid : "raise" or "exclude"
-        What to do with invalid rows (NaN, negative absolute pressure, p_in ≤ p_out,
-        duplicated rows): raise a DataError naming them, or drop and report them.
+        What to do with invalid rows (NaN or inf, negative or implausible values,
+        p_in ≤ p_out, duplicated rows or time stamps): raise a DataError naming them,
+        or drop and report them.
     valve : optional
         Keep only rows whose ``valve`` column equals this id.
     check_gauge : bool
         Refuse absolute pressures below 30 kPa (they look like gauge readings).
+    max_rows : int or None
+        A file with more data rows is thinned to every k-th row (k a power of two) with
+        a notice; memory stays bounded (None: no cap).
     """
     if on_invalid not in ("raise", "exclude"):
         raise ParameterError(f"on_invalid must be 'raise' or 'exclude', got {on_invalid!r}")
+    units, notes = dict(units or {}), []
     if isinstance(path_or_df, pd.DataFrame):
-        raw, source = path_or_df.copy(), "<DataFrame>"
-        lines = None
+        source, lines = "<DataFrame>", False
+        rename, gauge_cols = _resolve_columns(list(path_or_df.columns), source, columns, units,
+                                              notes)
+        raw = path_or_df.rename(columns=rename)
+        if "row" not in raw:  # a frame loaded before keeps its source row numbers
+            raw.insert(0, "row", np.arange(1, len(raw) + 1))
     else:
-        path = Path(path_or_df)
-        raw, lines = _read_csv(path)
-        source = str(path)
-    if columns:
-        unknown = [k for k in columns if k not in raw.columns]
-        if unknown:
-            raise DataError(f"{source}: column mapping names columns not in the data: "
-                            f"{unknown}", hint=f"columns found: {list(raw.columns)}")
-        raw = raw.rename(columns=dict(columns))
-    missing = [c for c in REQUIRED if c not in raw.columns]
-    if missing:
-        raise DataError(
-            f"{source}: missing column(s) {', '.join(missing)}",
-            hint=f"found columns {list(raw.columns)}; rename them or pass a column mapping "
-                 f"(columns={{'Pin': 'p_in_kPa'}}, CLI --map Pin=p_in_kPa)")
+        source, lines = str(path_or_df), True
+        raw, gauge_cols = _read_file(path_or_df, columns, units, notes, max_rows)
     keep = list(REQUIRED) + [c for c in OPTIONAL if c in raw.columns]
-    extra = [c for c in raw.columns if c not in keep]
-    frame = raw[keep + extra].copy()
-    if "row" not in frame:  # a frame loaded before keeps its source row numbers
-        frame.insert(0, "row", np.arange(1, len(frame) + 1))
-    if lines is not None and "line" not in frame:
-        frame.insert(1, "line", lines[:len(frame)])
+    frame = raw[keep + [c for c in raw.columns if c not in keep]].copy()
+    frame = _select_valve(frame, source, valve)
+    _numeric(frame, source)
+    _convert_units(frame, source, units, gauge, gauge_cols, ambient_kpa)
+    if check_gauge and not gauge:
+        _check_not_gauge(frame, source)
+    frame, excluded = _exclude(frame, source, lines, on_invalid)
+    if len(frame) < MIN_ROWS:
+        raise DataError(f"{source}: {len(frame)} valid row(s); a fit needs at least {MIN_ROWS} "
+                        f"(several sweeps of held points)",
+                        hint="see the excluded rows" if len(excluded) else "measure more points")
+    frame = _time_order(frame, source, notes)
+    bias = _remove_bias(frame, flow_bias, notes)
+    frame = frame.reset_index(drop=True)
+    return Measurements(frame=frame, excluded=excluded, source=source, bias_mg_s=bias,
+                        ambient_kpa=ambient_kpa, notes=notes)
+
+
+def _select_valve(frame, source, valve):
     if valve is not None:
         if "valve" not in frame:
             raise DataError(f"{source}: valve={valve!r} given but the data has no 'valve' column")
@@ -168,116 +328,41 @@ def load_measurements(path_or_df, *, ambient_kpa=None, gauge=False, units=None, 
         if not chosen.any():
             raise DataError(f"{source}: no rows for valve {valve!r}",
                             hint=f"valves in the file: {sorted(frame['valve'].astype(str).unique())}")
-        frame = frame[chosen]
-    elif "valve" in frame and frame["valve"].nunique(dropna=True) > 1:
+        return frame[chosen]
+    if "valve" in frame and frame["valve"].nunique(dropna=True) > 1:
         ids = sorted(frame["valve"].astype(str).unique())
         raise DataError(f"{source}: the file holds {len(ids)} valves ({', '.join(ids[:8])})",
                         hint="choose one with valve=ID (CLI --valve ID)")
-    # numbers
-    for column in REQUIRED + tuple(c for c in ("sweep", "h_seat_mm", "T_K") if c in frame):
-        values = pd.to_numeric(frame[column], errors="coerce")
-        bad = values.isna() & frame[column].notna()
-        if bad.any():
-            rows = frame.loc[bad, "row"].to_numpy()
-            raise DataError(f"{source}: column {column} holds text that is not a number in "
-                            f"row(s) {_rows_text(rows)} (e.g. {frame.loc[bad, column].iloc[0]!r})",
-                            hint="use '.' as decimal point and only numbers in data columns")
-        frame[column] = values.astype(float)
-    # units
-    units = dict(units or {})
-    if gauge and ambient_kpa is None:
-        raise DataError("gauge pressures need the ambient (barometric) pressure",
-                        hint="pass ambient_kpa (CLI --ambient), e.g. 96 kPa at 480 m as in "
-                             "the paper, 101.325 kPa at sea level")
-    from ..units import to_internal
+    return frame
 
+
+def _check_not_gauge(frame, source) -> None:
+    """Gauge readings passed as absolute: many values below GAUGE_SUSPECT_KPA."""
     for column in PRESSURES:
-        unit = _unit_for(column, units)
-        try:
-            frame[column] = to_internal(frame[column].to_numpy(), unit or "kPa", "pressure",
-                                        gauge=gauge, ambient_kpa=ambient_kpa or 0.0,
-                                        name=column)
-        except ParameterError as exc:
-            raise DataError(f"{source}: {exc.message}", hint=exc.hint) from None
-    unit = _unit_for("mdot_mg_s", units)
-    if unit:
-        try:
-            frame["mdot_mg_s"] = to_internal(frame["mdot_mg_s"].to_numpy(), unit, "flow",
-                                             name="mdot_mg_s")
-        except ParameterError as exc:
-            raise DataError(f"{source}: {exc.message}", hint=exc.hint) from None
-    # whole-file check: gauge readings passed as absolute
-    if check_gauge and not gauge:
-        for column in PRESSURES:
-            values = frame[column].to_numpy()
-            low = values < GAUGE_SUSPECT_KPA
-            if np.count_nonzero(low) > max(2, 0.01 * len(values)):
-                raise DataError(
-                    f"{source}: {column} has {np.count_nonzero(low)} values below "
-                    f"{GAUGE_SUSPECT_KPA:g} kPa absolute (lowest {np.nanmin(values):.3g} kPa): "
-                    f"these look like gauge pressures passed as absolute",
-                    hint="pass gauge=True with ambient_kpa (CLI --gauge --ambient 96); the model "
-                         "needs absolute pressures")
-    # row checks, in order; each reason lists its rows
-    problems = []
-    nan = frame[list(REQUIRED)].isna()
-    for column in REQUIRED:
-        problems.append((nan[column].to_numpy(), f"NaN in {column}"))
-    invalid = nan.any(axis=1).to_numpy().copy()
-    for column in PRESSURES:
-        negative = (frame[column] <= 0).to_numpy() & ~invalid
-        problems.append((negative, f"negative absolute pressure in {column}"))
-        invalid |= negative
-    reverse = (frame["p_in_kPa"] <= frame["p_out_kPa"]).to_numpy() & ~invalid
-    problems.append((reverse, "p_in <= p_out (no forward pressure difference)"))
-    invalid |= reverse
-    duplicated = frame.duplicated(subset=[c for c in frame.columns if c not in ("row", "line")],
-                                  keep="first").to_numpy() & ~invalid
-    problems.append((duplicated, "duplicate of an earlier row"))
-    excluded_parts = []
-    for mask, reason in problems:
-        if not mask.any():
-            continue
-        rows = frame.loc[mask, "row"].to_numpy()
-        where = _rows_text(rows)
-        if lines is not None:
-            where += " (file lines " + _rows_text(frame.loc[mask, "line"].to_numpy()) + ")"
-        if on_invalid == "raise":
-            hint = {"p_in ": "the input port must be the higher-pressure port; swap the columns "
-                            "for backward flow, or exclude these rows",
-                    "dupli": "remove the repeated rows",
-                    "NaN i": "fill the gaps",
-                    "negat": "check the sensor or the units; gauge data needs --gauge"}[reason[:5]]
-            raise DataError(f"{source}: {mask.sum()} row(s) with {reason}: data row(s) {where}",
-                            hint=hint + "; or pass on_invalid='exclude' (CLI --exclude-invalid) "
-                                        "to drop them with a report")
-        part = frame.loc[mask].copy()
-        part["reason"] = reason
-        excluded_parts.append(part)
-        frame = frame.loc[~mask]
-        # keep masks aligned with the shrinking frame
-        problems = [(m[~mask], r) for m, r in problems]
-    excluded = (pd.concat(excluded_parts, ignore_index=True) if excluded_parts
-                else pd.DataFrame(columns=list(frame.columns) + ["reason"]))
-    if len(frame) == 0:
-        raise DataError(f"{source}: no valid rows left", hint="see the excluded rows")
-    notes = []
-    bias = 0.0
-    if flow_bias is not None:
-        if isinstance(flow_bias, str):
-            if flow_bias != "min":
-                raise ParameterError(f"flow_bias must be None, 'min' or a number, got "
-                                     f"{flow_bias!r}")
-            bias = float(frame["mdot_mg_s"].min())
-            notes.append(f"flow-sensor bias removed: {bias:.4g} mg/s (smallest reading, as the "
-                         f"paper)")
-        else:
-            bias = float(flow_bias)
-            notes.append(f"flow-sensor bias removed: {bias:.4g} mg/s (given)")
-        frame["mdot_mg_s"] = frame["mdot_mg_s"] - bias
-    frame = frame.reset_index(drop=True)
-    return Measurements(frame=frame, excluded=excluded, source=source, bias_mg_s=bias,
-                        ambient_kpa=ambient_kpa, notes=notes)
+        values = frame[column].to_numpy()
+        low = values < GAUGE_SUSPECT_KPA
+        if np.count_nonzero(low) > max(2, 0.01 * len(values)):
+            raise DataError(
+                f"{source}: {column} has {np.count_nonzero(low)} values below "
+                f"{GAUGE_SUSPECT_KPA:g} kPa absolute (lowest {np.nanmin(values):.3g} kPa): "
+                f"these look like gauge pressures passed as absolute",
+                hint="pass gauge=True with ambient_kpa (CLI --gauge --ambient 96); the model "
+                     "needs absolute pressures")
+
+
+def _remove_bias(frame, flow_bias, notes) -> float:
+    if flow_bias is None:
+        return 0.0
+    if isinstance(flow_bias, str):
+        if flow_bias != "min":
+            raise ParameterError(f"flow_bias must be None, 'min' or a number, got {flow_bias!r}")
+        bias = float(frame["mdot_mg_s"].min())
+        notes.append(f"flow-sensor bias removed: {bias:.4g} mg/s (smallest reading, as the paper)")
+    else:
+        bias = float(flow_bias)
+        notes.append(f"flow-sensor bias removed: {bias:.4g} mg/s (given)")
+    frame["mdot_mg_s"] = frame["mdot_mg_s"] - bias
+    return bias
 
 
 def as_frame(data, **load_options) -> tuple[pd.DataFrame, Measurements | None]:

@@ -365,8 +365,8 @@ class ValveFit:
 
     def to_json(self) -> dict:
         out = {"params": {k: {"value": float(getattr(self.params, k)),
-                              "stderr": float(self.stderr[k]),
-                              "ci95": [float(v) for v in self.ci95[k]],
+                              "stderr": _finite_or_none(self.stderr[k]),
+                              "ci95": [_finite_or_none(v) for v in self.ci95[k]],
                               "unit": VALVE_PARAMETERS[k][0]} for k in NAMES},
                "metrics": {k: (int(v) if isinstance(v, (int, np.integer)) else float(v))
                            for k, v in self.metrics.items()},
@@ -406,6 +406,10 @@ class ValveFit:
             rel = f"({100 * e / abs(v):.2f}%)" if v else ""
             unit = VALVE_PARAMETERS[k][0]
             stage = "stage 1" if k in STAGE1 else "stage 2"
+            if not math.isfinite(e):
+                lines.append(f"    {k:<7}= {v:<11.5g} +/- not computed (needs --bootstrap 2 or "
+                             f"more)    {unit:<9} {stage}")
+                continue
             lines.append(f"    {k:<7}= {v:<11.5g} +/- {e:<10.3g} {rel:<9} 95% CI "
                          f"[{lo:.5g}, {hi:.5g}] {unit:<9} {stage}")
         corr = self.correlations()
@@ -423,6 +427,11 @@ class ValveFit:
     def correlations(self) -> pd.DataFrame:
         sd = np.sqrt(np.clip(np.diag(self.covariance.to_numpy()), 1e-300, None))
         return self.covariance / np.outer(sd, sd)
+
+
+def _finite_or_none(x):
+    """A float for JSON: None where not computed (NaN) or unbounded (inf)."""
+    return float(x) if math.isfinite(x) else None
 
 
 # --------------------------------------------------------------------------- driver
@@ -562,10 +571,13 @@ def fit_valve(data, *, mdot_min=1.0, C=0.1, correct_threshold=True, n_boot=100, 
         for k, i in enumerate(order2):
             if boot[k] <= 0:
                 cov[i, i] = analytic[k]
-    else:
+    else:  # no resampling: stage 1 has no uncertainty estimate (NaN: "not computed")
         cov[np.ix_(order2, order2)] = cov2
+        cov[order1, :] = np.nan
+        cov[:, order1] = np.nan
     covariance = pd.DataFrame(cov, index=list(NAMES), columns=list(NAMES))
-    stderr = {k: float(math.sqrt(max(cov[i, i], 0.0))) for i, k in enumerate(NAMES)}
+    stderr = {k: float(math.sqrt(max(cov[i, i], 0.0))) if np.isfinite(cov[i, i]) else math.nan
+              for i, k in enumerate(NAMES)}
     ci95 = {k: (getattr(params, k) - Z95 * stderr[k], getattr(params, k) + Z95 * stderr[k])
             for k in NAMES}
 

@@ -41,6 +41,6 @@ def test_bad_data_exits_2_with_a_message(tmp_path, capsys):
     bad.write_text("time_s,p_in_kPa,p_out_kPa,mdot_mg_s\n0,200,100,3\n")
     assert main(["fit", str(bad)]) == 2
     err = capsys.readouterr().err
-    assert "missing column(s) p_ctrl_kPa" in err and "hint" in err
+    assert "column p_ctrl_kPa is missing" in err and "hint" in err
     assert main(["fit", str(tmp_path / "none.csv")]) == 2
     assert main(["fit", str(bad), "--mdot-min", "lots"]) == 2

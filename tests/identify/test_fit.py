@@ -88,7 +88,9 @@ def test_uncertainty_options(bench):
     for k in NAMES:
         assert 0.3 < sweeps.stderr[k] / points.stderr[k] < 3.0, k
     bare = fit_valve(data, n_boot=0)
-    assert bare.stderr["ain"] == 0 and bare.stderr["Rf"] > 0
+    assert np.isnan(bare.stderr["ain"]) and bare.stderr["Rf"] > 0
+    assert "ain    = " in bare.report() and "not computed" in bare.report()
+    assert bare.to_json()["params"]["ain"]["stderr"] is None
     with pytest.raises(DataError, match="no such column"):
         fit_valve(data, n_boot=0, groups="nope")
 
