@@ -14,6 +14,7 @@ from pathlib import Path
 from ..errors import NetlistError, PneunetError, SourceSpan
 from .deck import DC, Deck, Measure, Op, Signal, Step, Tran
 from .expr import Scope, evaluate
+from .arrays import split_range
 from .includes import KEYWORDS as INCLUDE_KEYWORDS, IncludePolicy, expand
 from .limits import DEFAULT as DEFAULT_LIMITS, Limits
 from .syntax import Call, Group, Pair, SourceText, Statement, Str, Word
@@ -38,7 +39,6 @@ OPTIONS = {
 VALVE_CARD = {"Rf": "resistance", "pclose": "pressure_difference", "ptrans": "pressure_difference",
               "e": "dimensionless", "ain": "dimensionless", "aout": "dimensionless"}
 
-_RANGE = re.compile(r"^(.*)\[\s*(-?\d+)\s*:\s*(-?\d+)\s*(?::\s*(-?\d+)\s*)?\]$")
 _BRACES = re.compile(r"\{[^{}]*\}")
 
 
@@ -200,6 +200,10 @@ class _Builder:
         for i, n in enumerate(names):
             if n in names[:i]:
                 raise _err(f"parameter {n!r} is stepped twice", deck.steps[i].span)
+        if math.prod(len(s.values) for s in deck.steps) > self.limits.max_sweep_points:
+            raise _err(f"the .step lines make {math.prod(len(s.values) for s in deck.steps)} "
+                       f"points ({self.limits.exceeded('max_sweep_points')})",
+                       deck.steps[-1].span, self.limits.hint("max_sweep_points"))
         return deck
 
     def _options(self, statements):
@@ -404,16 +408,7 @@ class _Builder:
         else:
             name_item = head
         name_text = self._subst(name_item, scope)
-        m = _RANGE.match(name_text)
-        if m:
-            base, lo, hi, stp = m.group(1), int(m.group(2)), int(m.group(3)), int(m.group(4) or 1)
-            if stp == 0:
-                raise _err("array step must not be 0", name_item)
-            indices = list(range(lo, hi + (1 if hi >= lo else -1), stp if hi >= lo else -abs(stp)))
-            if len(indices) > 100000:
-                raise _err(f"array of {len(indices)} elements is too large", name_item)
-        else:
-            base, indices = name_text, [None]
+        base, indices = split_range(name_text, name_item, self.limits) or (name_text, [None])
         for idx in indices:
             sc = scope if idx is None else scope.child({"index": float(idx)})
             name = base if idx is None else f"{base}[{idx}]"
@@ -422,18 +417,17 @@ class _Builder:
 
     def _expand_node(self, item, scope, idx, indices):
         text = self._subst(item, scope)
-        m = _RANGE.match(text)
-        if not m:
+        split = split_range(text, item, self.limits)
+        if split is None:
             return text
         if idx is None:
             raise _err(f"node range {text!r} on an element that is not an array", item,
                        "give the element name a range too, e.g. X[1:8]")
-        lo, hi, stp = int(m.group(2)), int(m.group(3)), int(m.group(4) or 1)
-        nodes = list(range(lo, hi + (1 if hi >= lo else -1), stp if hi >= lo else -abs(stp)))
+        base, nodes = split
         if len(nodes) != len(indices):
             raise _err(f"node range {text!r} has {len(nodes)} entries, the element array "
                        f"{len(indices)}", item)
-        return f"{m.group(1)}[{nodes[indices.index(idx)]}]"
+        return f"{base}[{nodes[indices.index(idx)]}]"
 
     def _one_element(self, st, head, name_item, name, family, rest, scope, prefix, nodemap,
                      stack, idx, indices):
@@ -505,6 +499,10 @@ class _Builder:
             items[key] = it.value
         for key, it in items.items():
             given[key] = self._param_value(family, key, it, scope, full)
+        if len(self.circuit.elements) >= self.limits.max_elements:
+            raise _err(f"more than {len(self.circuit.elements)} elements "
+                       f"({self.limits.exceeded('max_elements')})", name_item,
+                       self.limits.hint("max_elements"))
         try:
             self.circuit.add(family.kind, full, nodes, span=name_item.span, **given)
         except PneunetError as err:
@@ -683,6 +681,11 @@ class _Builder:
             raise _err(f"t_step must be > 0 s, got {step:g}", st.items[1])
         if start < 0 or start >= stop:
             raise _err("t_start must lie in [0, t_stop)", st.items[3])
+        if step is not None and (stop - start) / step > self.limits.max_output_points:
+            raise _err(f".tran {step:g} {stop:g} asks for {(stop - start) / step:.3g} output "
+                       f"points ({self.limits.exceeded('max_output_points')})", st.items[1],
+                       "a larger output step (the solver's own steps are not limited by it); "
+                       + self.limits.hint("max_output_points"))
         return Tran(stop, step, start, st.span)
 
     def _dc(self, st):
@@ -716,9 +719,11 @@ class _Builder:
         start, stop, step = (conv(w) for w in items)
         if step == 0 or (stop - start) / step < 0:
             raise _err(f"step {step:g} does not go from {start:g} to {stop:g}", items[2])
-        n = int(math.floor((stop - start) / step + 1e-9)) + 1
-        if n > 100000:
-            raise _err(f"{n} sweep points are too many", items[2])
+        n = (stop - start) / step + 1
+        if n > self.limits.max_sweep_points:
+            raise _err(f"{n:.3g} sweep points ({self.limits.exceeded('max_sweep_points')})",
+                       items[2], self.limits.hint("max_sweep_points"))
+        n = int(math.floor(n - 1 + 1e-9)) + 1
         return [start + i * step for i in range(n)]
 
     def _step(self, st):

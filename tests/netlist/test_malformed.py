@@ -103,7 +103,8 @@ def test_a_node_with_one_connection_is_warned_with_a_did_you_mean(capsys, tmp_pa
 
 def test_output_file_in_the_way_and_absurd_output_grid_exit_2(capsys, tmp_path):
     """``-o`` naming an existing file, and ``.tran 1e-9 30s`` (3·10¹⁰ output points): exit 2
-    with what to change, no traceback and no allocation attempt."""
+    with what to change, no traceback and no allocation attempt; the limit is named and an
+    unknown --limit name is exit 2."""
     net = tmp_path / "n.pn"
     net.write_text("P1 a 200kPa\nR1 a atm 1\nV1 a 10mL\n.tran 10ms 0.1s\n")
     blocker = tmp_path / "file"
@@ -113,4 +114,8 @@ def test_output_file_in_the_way_and_absurd_output_grid_exit_2(capsys, tmp_path):
     net.write_text("P1 a 200kPa\nR1 a atm 1\nV1 a 10mL\n.tran 1e-9 30s\n")
     assert main(["run", str(net), "-o", str(tmp_path / "out"), "-q"]) == 2
     err = capsys.readouterr().err
-    assert "MAX_OUTPUT_POINTS" in err and "Traceback" not in err
+    assert f"{net}:4:7: error: .tran 1e-09 30 asks for 3e+10 output points (limit " \
+        "max_output_points = 10000000)" in err and "Traceback" not in err
+    assert main(["run", str(net), "-o", str(tmp_path / "out"), "-q", "--limit",
+                 "max_output_points=1e11", "--limit", "max_elemnts=5"]) == 2
+    assert "unknown limit 'max_elemnts'" in capsys.readouterr().err
