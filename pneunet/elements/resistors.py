@@ -28,25 +28,27 @@ class _QuadratureFamily(ElementFamily):
 
     ports = ("a", "b")
 
-    def _law(self, p, partials):
-        """(ṁ, ∂ṁ/∂p_a, ∂ṁ/∂p_b) for pressures p (..., n, 2); few instances on floats."""
+    def _scalar_laws(self, p, partials):
+        """Each instance's (ṁ, ∂ṁ/∂p_a, ∂ṁ/∂p_b) on Python floats (laws.Scalar), p (n, 2)."""
         band = self.context.options.flow_band
-        if p.ndim == 2 and self.n <= FEW_INSTANCES:
-            out = [quadrature_flow(p_a, p_b, r, band, partials, xp=Scalar)
-                   for (p_a, p_b), r in zip(p.tolist(), self._r.tolist())]
-            if not partials:
-                return np.array([mdot for mdot, _, _ in out]), None, None
-            return np.array(out).T
-        return quadrature_flow(p[..., 0], p[..., 1], self._r, band, partials)
+        return [quadrature_flow(p_a, p_b, r, band, partials, xp=Scalar)
+                for (p_a, p_b), r in zip(p.tolist(), self._r_floats)]
 
     def outflows(self, t, p, pdot):
-        mdot, d_a, d_b = self._law(p, partials=True)
+        if self.n <= FEW_INSTANCES:
+            laws = self._scalar_laws(p, partials=True)
+            return (np.array([(m, -m) for m, _, _ in laws]),
+                    np.array([((d_a, d_b), (-d_a, -d_b)) for _, d_a, d_b in laws]), None)
+        mdot, d_a, d_b = quadrature_flow(p[:, 0], p[:, 1], self._r, self.context.options.flow_band)
         grad = np.empty((self.n, 1, 2))
         grad[:, 0, 0], grad[:, 0, 1] = d_a, d_b
         return mdot[:, None] * _OUT_IN, _OUT_IN[:, None] * grad, None
 
     def flows(self, t, p, pdot):
-        mdot, _, _ = self._law(p, partials=False)
+        if self.n <= FEW_INSTANCES and p.ndim == 2:
+            return np.array([(m, -m) for m, _, _ in self._scalar_laws(p, partials=False)])
+        mdot, _, _ = quadrature_flow(p[..., 0], p[..., 1], self._r,
+                                     self.context.options.flow_band, partials=False)
         return mdot[..., None] * _OUT_IN
 
     def signals(self, t, p):
@@ -65,6 +67,7 @@ class Resistor(_QuadratureFamily):
     def __init__(self, specs, context):
         super().__init__(specs, context)
         self._r = self.column("R")
+        self._r_floats = self._r.tolist()
 
 
 @register
@@ -85,3 +88,4 @@ class Pipe(_QuadratureFamily):
         opts = context.options
         self._r = pipe_resistance(self.column("length"), self.column("diameter"),
                                   self.column("f"), opts.temperature, context.gas.molar_mass_g_mol)
+        self._r_floats = self._r.tolist()

@@ -22,6 +22,7 @@ from .base import FEW_INSTANCES, ElementFamily, Param
 
 _FD_STEP_KPA = 1e-4
 _PORTS = np.array([1.0, -1.0, 0.0])  # flow in→out leaves node in, enters out; none at ctrl
+_NO_FLOW = (0.0, 0.0, 0.0)  # the control port's row of partials
 
 
 @register
@@ -69,15 +70,13 @@ class MembraneValve(ElementFamily):
         for i, m in enumerate(models):
             if not self._analytic[i]:
                 self._custom.setdefault(id(m), (m, []))[1].append(i)
-        # few valves: each one's (forward, backward) parameters as floats (laws.Scalar)
+        # few analytic valves: each one's (forward, backward) parameters as floats
         self._rows = None
-        if self.n <= FEW_INSTANCES:
+        if self.n <= FEW_INSTANCES and self._analytic.all():
             both = self._both or (np.array(list(self._fwd.values())),) * 2
             self._rows = list(zip(both[0].T.tolist(), both[1].T.tolist()))
 
     def _analytic_flow(self, p, partials=True):
-        if self._rows is not None and p.ndim == 2:
-            return self._scalar_flow(p, partials)
         if self._both is None:
             params = self._fwd.values()
         else:  # each valve's parameters for its flow direction: (6, ..., n)
@@ -86,18 +85,18 @@ class MembraneValve(ElementFamily):
         return valve_flow_and_partials(p[..., 0], p[..., 1], p[..., 2], *params,
                                        band=self.context.options.flow_band, partials=partials)
 
-    def _scalar_flow(self, p, partials):
-        """:meth:`_analytic_flow` valve by valve on Python floats (p: (n, 3))."""
+    def _scalar_laws(self, p, partials):
+        """Each valve's (ṁ, partials) on Python floats (laws.Scalar), p (n, 3)."""
         band = self.context.options.flow_band
-        out = [valve_flow_and_partials(p_in, p_out, p_ctrl, *(fwd if p_in >= p_out else bwd),
-                                       band=band, partials=partials, xp=Scalar)
-               for (p_in, p_out, p_ctrl), (fwd, bwd) in zip(p.tolist(), self._rows)]
-        if not partials:
-            return np.array([mdot for mdot, _ in out]), None
-        table = np.array([(mdot, *grad) for mdot, grad in out]).T
-        return table[0], (table[1], table[2], table[3])
+        return [valve_flow_and_partials(p_in, p_out, p_ctrl, *(fwd if p_in >= p_out else bwd),
+                                        band=band, partials=partials, xp=Scalar)
+                for (p_in, p_out, p_ctrl), (fwd, bwd) in zip(p.tolist(), self._rows)]
 
     def outflows(self, t, p, pdot):
+        if self._rows is not None:
+            laws = self._scalar_laws(p, partials=True)
+            return (np.array([(m, -m, 0.0) for m, _ in laws]),
+                    np.array([(g, (-g[0], -g[1], -g[2]), _NO_FLOW) for _, g in laws]), None)
         mdot, (d_in, d_out, d_ctrl) = self._analytic_flow(p)
         grads = np.empty((self.n, 1, 3))
         grads[:, 0, 0], grads[:, 0, 1], grads[:, 0, 2] = d_in, d_out, d_ctrl
@@ -113,6 +112,8 @@ class MembraneValve(ElementFamily):
         return mdot
 
     def flows(self, t, p, pdot):
+        if self._rows is not None and p.ndim == 2:
+            return np.array([(m, -m, 0.0) for m, _ in self._scalar_laws(p, partials=False)])
         return self._flow(p)[..., None] * _PORTS
 
     def signals(self, t, p):
