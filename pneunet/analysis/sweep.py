@@ -267,24 +267,32 @@ class DeckMeasure:
 # -- running --------------------------------------------------------------------------
 def evaluate_point(build: Callable, analysis: Callable, point: dict, keep_trace: bool = False) -> dict:
     """Build and analyse one point; never raises: errors are returned in the record."""
+    from ..engine.diagnostics import collect
+
     start = time.perf_counter()
     record = {"key": point_key(point), "params": point, "result": {}, "error": None}
-    try:
-        circuit = build(point) if not isinstance(build, NetlistBuilder) else build(point)
-        if not isinstance(build, NetlistBuilder):
-            apply_overrides(circuit, point)
-        if isinstance(analysis, DeckMeasure):
-            out = analysis(circuit, point)
-        else:
-            out = analysis(circuit)
-        result, sol = out if isinstance(out, tuple) else (out, None)
-        record["result"] = {k: _plain(v) for k, v in result.items()}
-        if keep_trace and sol is not None:
-            record["trace"] = sol.to_pandas().to_dict(orient="list")
-    except Exception as exc:  # noqa: BLE001 - a failed point is data, not a crash
-        record["error"] = f"{type(exc).__name__}: {exc}"
-        if not isinstance(exc, PneunetError):
-            record["traceback"] = traceback.format_exc(limit=4)
+    with collect() as heard:
+        try:
+            circuit = build(point) if not isinstance(build, NetlistBuilder) else build(point)
+            if not isinstance(build, NetlistBuilder):
+                apply_overrides(circuit, point)
+            if isinstance(analysis, DeckMeasure):
+                out = analysis(circuit, point)
+            else:
+                out = analysis(circuit)
+            result, sol = out if isinstance(out, tuple) else (out, None)
+            record["result"] = {k: _plain(v) for k, v in result.items()}
+            if keep_trace and sol is not None:
+                record["trace"] = sol.to_pandas().to_dict(orient="list")
+        except Exception as exc:  # noqa: BLE001 - a failed point is data, not a crash
+            record["error"] = f"{type(exc).__name__}: {exc}"
+            if not isinstance(exc, PneunetError):
+                record["traceback"] = traceback.format_exc(limit=4)
+    record["solver_messages"] = sum(len(d.messages) for d in heard)
+    stopped = [d for d in heard if not d.recovered]
+    if stopped and record["error"] is None:  # the analysis went on with a cut-short run
+        record["error"] = "SolverError: a simulation stopped early: " + \
+            "; ".join(stopped[0].sentences())
     record["elapsed_s"] = time.perf_counter() - start
     return record
 
@@ -300,6 +308,7 @@ class SweepResult:
     failed: int = 0
     wall_time_s: float = 0.0
     workers: int = 1
+    with_solver_messages: int = 0  # points whose simulations drew integrator messages
 
     def to_csv(self, path):
         path = Path(path)
@@ -360,11 +369,10 @@ def run_sweep(build: Callable, points: Sequence[dict], analysis: Callable | None
     if store:
         Path(store).parent.mkdir(parents=True, exist_ok=True)
         fh = open(store, "a")
-    bar = None
-    if progress:
-        from tqdm.auto import tqdm
+    from ..progress import progress_bar
 
-        bar = tqdm(total=len(points), initial=len(points) - len(todo), unit="pt", desc="sweep")
+    bar = progress_bar(progress, total=len(points), initial=len(points) - len(todo), unit="pt",
+                       desc="sweep")
     traces = {}
 
     def finish(rec):
@@ -375,8 +383,7 @@ def run_sweep(build: Callable, points: Sequence[dict], analysis: Callable | None
         if fh is not None:
             fh.write(json.dumps(rec, default=_json_default) + "\n")
             fh.flush()
-        if bar is not None:
-            bar.update(1)
+        bar.update(1)
 
     n_workers = 1
     own_pool = None
@@ -420,14 +427,15 @@ def run_sweep(build: Callable, points: Sequence[dict], analysis: Callable | None
     finally:
         if own_pool is not None:
             own_pool.shutdown(wait=True, cancel_futures=True)
-        if bar is not None:
-            bar.close()
+        bar.close()
         if fh is not None:
             fh.close()
     table = records_table([records[k] for k in keys if k in records])
     return SweepResult(table, traces, computed=len(todo), reused=len(points) - len(todo),
                        failed=int(table["error"].notna().sum()) if len(table) else 0,
-                       wall_time_s=time.perf_counter() - wall, workers=n_workers)
+                       wall_time_s=time.perf_counter() - wall, workers=n_workers,
+                       with_solver_messages=int((table.get("solver_messages", 0) > 0).sum())
+                       if len(table) else 0)
 
 
 def records_table(records: list[dict]):
@@ -439,6 +447,7 @@ def records_table(records: list[dict]):
         row = dict(rec["params"])
         row.update(rec.get("result") or {})
         row["error"] = rec.get("error")
+        row["solver_messages"] = rec.get("solver_messages", 0)
         row["elapsed_s"] = rec.get("elapsed_s")
         row["key"] = rec["key"]
         rows.append(row)

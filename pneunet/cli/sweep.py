@@ -133,7 +133,8 @@ def main(args) -> int:
             cluster.close()
     result.to_csv(out)
     summary = {"points": len(points), "computed": result.computed, "reused": result.reused,
-               "failed": result.failed, "workers": result.workers,
+               "failed": result.failed, "with_solver_messages": result.with_solver_messages,
+               "workers": result.workers,
                "wall_time_s": round(result.wall_time_s, 3), "table": str(out), "store": str(store)}
     table = result.table
     if "regime_branches" in table.columns:
@@ -149,6 +150,9 @@ def main(args) -> int:
         print(f"{summary['points']} points ({result.computed} computed, {result.reused} from "
               f"{store}), {result.failed} failed, {result.workers} worker(s), "
               f"{result.wall_time_s:.1f} s -> {out}")
+        if result.with_solver_messages:
+            print(f"{result.with_solver_messages} point(s) with integrator warnings that "
+                  "recovered (column solver_messages)")
         if "agreement" in summary:
             a = summary["agreement"]
             print(f"regime: transient and stationary branches agree at {a['agree']} of "

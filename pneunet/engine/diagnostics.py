@@ -98,6 +98,12 @@ class Diagnostics:
     recovered: bool = True
     where: str | None = None
 
+    def __repr__(self) -> str:
+        state = "recovered" if self.recovered else "stopped" + (
+            f" near {self.where}" if self.where else "")
+        return (f"<Diagnostics: {len(self.messages)} message(s) of {len(self.kinds())} "
+                f"kind(s), {state}>")
+
     def kinds(self) -> dict:
         """{kind: {'count', 'first_t', 'last_t' (s), 'text' (the first message)}}."""
         out = {}

@@ -12,8 +12,8 @@ from pneunet.paper_circuits import oscillator
 
 RAW = ("[WARNING]", "[rank 0]", "Error: -", "ida_ls.c", "feedstock")
 
-WARNING_LINE = ("[WARNING][rank 0][/home/conda/feedstock_root/build/sundials/src/ida/ida_ls.c:1687]"
-                "[idaLsPerf] Warning: at t = 2.0025, poor iterative algorithm performance.\n")
+WARNING_LINE = ("[WARNING][rank 0][/home/conda/feedstock_root/build/sundials/src/ida/"
+                "ida_ls.c:1687][idaLsPerf] Warning: at t = 2.0025, poor iterative algorithm performance.\n")
 HANDLER_LINE = "\n[IDAHandleFailure, Error: -4] At t = 1.5, corrector convergence failed repeatedly\n\n"
 
 
@@ -96,3 +96,32 @@ def test_cli_run_json_reports_the_messages_as_data_and_q_silences_them(tmp_path,
     assert "warning: IDA IDAHandleFailure -4" in err
     assert main(["run", str(netlist), "-o", str(tmp_path / "b"), "-q"]) == 0
     assert capfd.readouterr() == ("", "")
+
+
+def _folding(point):
+    return oscillator(fold_threshold=1e-8)
+
+
+def _stopping(point):
+    return oscillator(flow_band=1e-6, rtol=1e-2, atol=10.0)
+
+
+def _lenient(circuit):
+    """An analysis that goes on after a failed simulation."""
+    try:
+        circuit.tran(5.0)
+    except SolverError:
+        pass
+    return {"x": 1.0}
+
+
+def test_sweep_counts_points_with_messages_and_a_swallowed_solver_failure_as_failed(capfd):
+    from pneunet.analysis.sweep import run_sweep
+
+    folding = run_sweep(_folding, [{"Rvent.R": 3.0}], _lenient, workers=1, progress=False)
+    assert folding.failed == 0 and folding.with_solver_messages == 1
+    assert folding.table["solver_messages"].iloc[0] >= 1
+    stopping = run_sweep(_stopping, [{"Rvent.R": 3.0}], _lenient, workers=1, progress=False)
+    assert stopping.failed == 1
+    assert "stopped" in stopping.table["error"].iloc[0]
+    assert_no_raw_sundials("".join(capfd.readouterr()))
