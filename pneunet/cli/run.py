@@ -85,6 +85,7 @@ def main(args) -> int:
         res = RunResult(d)
         files = []
         counts: dict[str, int] = {}
+        solver_messages = {}
         for analysis in d.analyses:  # write each result as soon as it exists
             try:
                 result = run_analysis(d, analysis, progress)
@@ -113,12 +114,13 @@ def main(args) -> int:
                 result.plot(png, signals=saves or None)
                 files.append(str(png))
             say(f"  .{analysis.kind}: wrote {csv}")
-            if analysis.kind == "tran" and not args.quiet and not args.json:
-                stats = dict(getattr(result, "stats", {}) or {})
-                if stats:
-                    shown = ", ".join(f"{k}={v}" for k, v in stats.items()
-                                      if isinstance(v, (int, float)))
-                    say(f"    stats: {shown}")
+            stats = dict(getattr(result, "stats", {}) or {})
+            if "solver_messages" in stats:
+                solver_messages[name] = stats.get("solver_diagnostics", {"count": 0})
+            if stats:
+                say("    stats: " + ", ".join(f"{k}={v:.3g}" if isinstance(v, float) else
+                                              f"{k}={v}" for k, v in stats.items()
+                                              if isinstance(v, (int, float))))
         res.measures, res.failures = evaluate_measures(d.measures, res.results)
         for m in d.measures:
             v = res.measures.get(m.name)
@@ -128,7 +130,8 @@ def main(args) -> int:
                 line += f"  ({res.failures.get(m.name)})"
             say(line)
         report["steps"].append({"params": point, "measures": res.measures,
-                                "failures": res.failures, "files": files})
+                                "failures": res.failures, "files": files,
+                                "solver_messages": solver_messages})
         summary_rows.append({**point, **res.measures})
     if deck.steps:
         import pandas as pd
@@ -143,7 +146,7 @@ def main(args) -> int:
         if not deck.steps:
             only = report["steps"][0]
             report.update(measures=only["measures"], failures=only["failures"],
-                          files=only["files"])
+                          files=only["files"], solver_messages=only["solver_messages"])
             del report["steps"]
         print(json.dumps(report, indent=2))
     return status

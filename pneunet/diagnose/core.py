@@ -257,7 +257,7 @@ def diagnose(data, *, effects=None, n_splits=5, z=3.0, min_gain=0.02, max_effect
 
 def _diagnose(data, *, effects, n_splits, z, min_gain, max_effects, mdot_min, screen_gain,
               coverage, progress, seed, start, load_options):
-    from tqdm.auto import tqdm
+    from ..progress import progress_bar
 
     frame = _as_frame(data, load_options or {})
     df, notes = prepare(frame)
@@ -270,8 +270,8 @@ def _diagnose(data, *, effects, n_splits, z, min_gain, max_effects, mdot_min, sc
                 "mdot_min": mdot_min, "screen_gain": screen_gain, "coverage": coverage,
                 "candidates": [c.id for c in cands]}
     n_dir = len(np.unique(df["sweep"]))
-    bar = tqdm(total=3 + len(cands) * (1 + max_effects), desc="diagnose", unit="step",
-               disable=not progress, leave=False)
+    bar = progress_bar(progress, total=3 + len(cands) * (1 + max_effects), desc="diagnose",
+                       unit="step", leave=False)
     try:
         bar.set_postfix_str("baseline fit")
         if start is None:
