@@ -1,6 +1,7 @@
 """``pneunet fit-trace``: bad recordings give exit code 2 with the file, the column and
 what to do; ``--json`` prints only JSON on stdout."""
 import json
+import re
 
 import numpy as np
 import pytest
@@ -8,6 +9,8 @@ import pytest
 from pneunet.cli import main
 
 from .standalone import oscillator_record
+
+RAW_SUNDIALS = re.compile(r"\[(WARNING|ERROR)\]\[rank|\[\w+, Error: -?\d+\]")
 
 
 @pytest.fixture(scope="module")
@@ -53,6 +56,7 @@ def test_json_is_the_only_thing_on_stdout(tmp_path, capfd, record):
     code, out, err = run(capfd, path, "--fit", "Rvent=3.5:1:10", "--set", "V=50",
                          "--max-nfev", "8", "--json", "--no-progress")
     assert code == 0
+    assert not RAW_SUNDIALS.search(out + err)  # no SUNDIALS line on fd 1 or 2 (issue 16)
     j = json.loads(out)  # nothing but JSON
     assert set(j["fit"]["values"]) == {"Rvent"}
     lo, hi = j["fit"]["ci"]["Rvent"]
