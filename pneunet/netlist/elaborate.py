@@ -18,7 +18,8 @@ from .arrays import split_range
 from .includes import KEYWORDS as INCLUDE_KEYWORDS, IncludePolicy, expand
 from .limits import DEFAULT as DEFAULT_LIMITS, Limits
 from .syntax import Call, Group, Pair, SourceText, Statement, Str, Word
-from .values import convert, number_in_expression, set_expression_ambient, split
+from .values import (SCALE, check_number, convert, dimension_of, number_in_expression,
+                     set_expression_ambient, split)
 
 REFERENCE = ("0", "gnd", "atm")
 DIRECTIVES = (".param", ".subckt", ".ends", *INCLUDE_KEYWORDS, ".model", ".ic", ".options",
@@ -257,7 +258,8 @@ class _Builder:
                             limits=self.limits)
         text = self._subst(word, scope)
         if split(text) is not None:
-            return number_in_expression(text, word.span, self.options.ambient)
+            return check_number(number_in_expression(text, word.span, self.options.ambient),
+                                text, word.span, tiny=False)
         value = scope.lookup(text)
         if value is None:
             raise _err(f"cannot read {text!r} as a number", word,
@@ -284,11 +286,17 @@ class _Builder:
         if split(text) is None:
             value = scope.lookup(text)
             if value is None:
+                if dimension_of(text) or text.lower() in SCALE:
+                    raise _err(f"{name}: unit {text!r} without a number", word,
+                               "remove the space between the number and its unit: 250mL, "
+                               "not 250 mL")
                 raise _err(f"{name}: cannot read {text!r} as a number", word,
                            _close(text, scope.names()) or
                            "write a number with its unit, e.g. " + _example(slot))
             return value
-        return convert(text, slot, word.span, name=name, ambient=opts.ambient, gas=opts.gas_model)
+        value = convert(text, slot, word.span, name=name, ambient=opts.ambient,
+                        gas=opts.gas_model)
+        return check_number(value, text, word.span, name)
 
     # ---- models
     def _model(self, st, scope):
@@ -484,6 +492,8 @@ class _Builder:
             raise _err(f"{family.kind} {full}: unexpected value {bad}", bad,
                        hint or f"{family.kind} takes {n_ports} nodes then "
                                + ", ".join(names) + " (in this order, or as key=value)")
+        if len(extra) > 1 and isinstance(extra[0], Word) and extra[0].text.lower() in REFERENCE:
+            self._node_read_as_value(family, full, names, extra)
         for key, it in zip(names, extra):
             items[key] = it
         for it in pairs:
@@ -509,6 +519,23 @@ class _Builder:
             if "duplicate element name" in err.message:
                 raise _err(err.message, name_item, err.hint) from None
             raise _err(f"{family.kind} {full}: {err.message}", name_item, err.hint) from None
+
+    def _node_read_as_value(self, family, full, names, extra):
+        """``V1 a 0 200kPa``: a reference node where the first value goes, then a value of
+        another dimension — the element was taken for one with more nodes."""
+        from ..units import SLOTS, pretty
+
+        parts = split(extra[1].text) if isinstance(extra[1], Word) else None
+        got = dimension_of(parts[1]) if parts and parts[1] else None
+        want = family.params[names[0]].slot
+        if got is None or got == want.split("_")[0]:
+            return
+        hint = (f"{family.kind} {full} has {len(family.ports)} node(s) "
+                f"({' '.join(family.ports)}), so {extra[0].text!r} was read as its {names[0]}")
+        if family.kind == "volume" and got == "pressure":
+            hint += "; V is a volume in pneunet, a pressure source is P: P1 a 200kPa"
+        raise _err(f"{full} needs a {want.replace('_', ' ')} ({pretty(SLOTS[want])}), got a "
+                   f"{got} ({parts[1]})", extra[1], hint)
 
     def _param_value(self, family, key, item, scope, full):
         from ..waveforms import Waveform  # noqa: F401
@@ -653,6 +680,10 @@ class _Builder:
             else:
                 raise _err(f".ic expects node=pressure, got {key}", key)
             value = self._number(it.value, "pressure", f"initial pressure of {node}", scope)
+            if value <= 0:
+                raise _err(f"initial pressure of {node} = {value:g} kPa: an absolute pressure "
+                           "must be > 0 (as for p0)", it.value,
+                           "pressures are absolute; a gauge pressure carries a g: 100kPag")
             node = self._node(node, prefix, nodemap)
             if node not in self.circuit.nodes:
                 raise _err(f"initial condition for unknown node {node!r}", key,

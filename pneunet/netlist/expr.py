@@ -12,6 +12,7 @@ Numbers may carry a SPICE scale suffix (``2k``, ``5m``) or a single-word unit
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 
 from ..errors import NetlistError, SourceSpan
@@ -59,7 +60,7 @@ class Scope:
 
 
 def _shift(span: SourceSpan, meta_column: int, base_column: int) -> SourceSpan:
-    return SourceSpan(span.file, span.line, base_column + meta_column - 1, span.text)
+    return dataclasses.replace(span, column=base_column + meta_column - 1)
 
 
 def evaluate(text: str, scope: Scope, span: SourceSpan, column: int | None = None,
@@ -76,7 +77,7 @@ def evaluate(text: str, scope: Scope, span: SourceSpan, column: int | None = Non
         raise NetlistError("empty expression {}", span=_shift(span, 1, base))
     try:
         tree = lark_parser().parse(text, start="expr")
-        return _Evaluator(scope, span, base, limits or DEFAULT).eval(tree)
+        value = _Evaluator(scope, span, base, limits or DEFAULT).eval(tree)
     except RecursionError:
         raise NetlistError("expression nested too deeply (more levels than Python's "
                            "recursion limit)", span=_shift(span, 1, base),
@@ -90,6 +91,11 @@ def evaluate(text: str, scope: Scope, span: SourceSpan, column: int | None = Non
             f"{tok.value!r}" if tok is not None else repr(text[col - 1:col] or "end")
         raise NetlistError(f"syntax error in expression {{{text}}}: unexpected {what}",
                            span=_shift(span, col, base)) from None
+    if not math.isfinite(value):
+        raise NetlistError(f"expression gives {value} (a result or a step overflows)",
+                           span=_shift(span, 1, base), hint="check the exponents and the "
+                           "parameter values it uses")
+    return value
 
 
 class _Evaluator:

@@ -131,3 +131,44 @@ _AMBIENT: dict[str, float] = {}
 
 def set_expression_ambient(kpa: float) -> None:
     _AMBIENT["kPa"] = kpa
+
+
+#: nonzero magnitudes below this (in the slot's internal unit) are refused: no pneumatic
+#: quantity is that small, and the solver divides by them
+TINY = 1e-100
+
+
+def check_number(value: float, text: str, span: SourceSpan, name: str = "",
+                 tiny: bool = True) -> float:
+    """``value`` read from ``text``, or an error at ``span``: overflow to inf, NaN, a
+    nonzero literal that underflows to 0, and (``tiny``) a nonzero value below :data:`TINY`."""
+    import math
+
+    label = f"{name}: " if name else ""
+    if math.isnan(value):
+        raise NetlistError(f"{label}{_cut(text)} is not a number (NaN)", span=span)
+    if math.isinf(value):
+        raise NetlistError(f"{label}{_cut(text)} is too large (beyond ±1.8e308, it overflows "
+                           "to infinity)", span=span, hint="check the exponent and the units")
+    literal = _NUMBER.match(text)
+    if value == 0 and literal and re.search(r"[1-9]", literal.group(1).split("e")[0]
+                                            .split("E")[0]):
+        raise NetlistError(f"{label}{_cut(text)} underflows to 0", span=span,
+                           hint="check the exponent; write 0 if zero is meant")
+    if tiny and value != 0 and abs(value) < TINY:
+        raise NetlistError(f"{label}{_cut(text)} is {abs(value):.3g} in internal units, too "
+                           f"small to compute with (|x| < {TINY:g})", span=span,
+                           hint="check the exponent and the unit; write 0 if zero is meant")
+    return value
+
+
+def dimension_of(unit: str) -> str | None:
+    """The slot whose dimension ``unit`` has (``'kPa'`` -> ``'pressure'``), or None."""
+    from ..units import GAUGE_UNITS
+
+    unit = unit[:-1] if unit in GAUGE_UNITS else unit
+    return next((slot for slot in _DIMENSION_ORDER if _unit_dimension_matches(unit, slot)), None)
+
+
+def _cut(text: str, width: int = 40) -> str:
+    return text if len(text) <= width else text[:width - 1] + "…"
