@@ -7,6 +7,8 @@ import json
 import os
 import sys
 
+from ..csvdata import TRACE_MAX_ROWS
+
 
 def register(subparsers) -> None:
     p = subparsers.add_parser(
@@ -53,6 +55,9 @@ def register(subparsers) -> None:
                    help="error waterfall plot (with --candidates)")
     p.add_argument("--json", action="store_true",
                    help="print only the result as JSON on stdout (solver messages: stderr)")
+    p.add_argument("--max-rows", type=int, default=TRACE_MAX_ROWS, metavar="N",
+                   help=f"read at most N samples; a longer recording is thinned evenly with a "
+                        f"notice (default {TRACE_MAX_ROWS})")
     p.add_argument("--no-progress", action="store_true", help="no progress messages on stderr")
     p.set_defaults(func=main)
 
@@ -120,6 +125,7 @@ def main(args) -> int:
     fixed = _kv(args.set, 1)
     if not params:
         raise ParameterError("nothing to fit", hint="add --fit NAME=GUESS:LOW:HIGH")
+    data = _recording(args)
     if args.netlist:
         from ..analysis.sweep import NetlistBuilder
 
@@ -134,12 +140,32 @@ def main(args) -> int:
             print(f"fit-trace: {msg}", file=sys.stderr, flush=True)
 
     with stdout_to_stderr(args.json):
-        out, text = _run(args, build, params, fixed, say)
+        out, text = _run(args, data, build, params, fixed, say)
     if args.json:
         print(json.dumps(_finite(out), indent=1, default=_json_default, allow_nan=False))
     else:
         print(text)
     return 0
+
+
+def _recording(args):
+    """The recording read and checked before any work (its notes on stderr): the
+    columns, and the column of the cycle node ``--node``."""
+    from ..errors import DataError
+    from ..traces.data import read_trace
+
+    data = read_trace(args.data, args.signal, max_rows=args.max_rows)
+    column = f"p_{args.node}_kPa"
+    if column not in data:
+        pressures = [c[2:-4] for c in data.columns if c.startswith("p_")]
+        raise DataError(f"column {column} is missing: the cycle node --node {args.node} sets the "
+                        f"phase, the period and the fit/held-out split", where=data.attrs["source"],
+                        hint=("choose the node with --node (recorded pressures: "
+                              + ", ".join(pressures) + ")") if pressures else
+                        "record the pressure of the oscillating node")
+    for note in data.attrs["notes"]:
+        print(f"fit-trace: note: {note}", file=sys.stderr, flush=True)
+    return data
 
 
 def _finite(o):
@@ -170,13 +196,13 @@ def _json_default(o):
     return str(o)
 
 
-def _run(args, build, params, fixed, say):
+def _run(args, data, build, params, fixed, say):
     from ..traces import diagnose_trace, fit_trace
     from ..traces.plots import plot_fit
 
     out = {}
     if args.candidates:
-        diag = diagnose_trace(build, args.data, params, fixed=fixed, signals=args.signal,
+        diag = diagnose_trace(build, data, params, fixed=fixed,
                               node=args.node, effects=args.effect,
                               train_fraction=args.train_fraction, max_nfev=args.max_nfev,
                               workers=args.workers, progress=say)
@@ -194,7 +220,7 @@ def _run(args, build, params, fixed, say):
 
         pool = process_pool(args.workers)
         try:
-            fit = fit_trace(build, args.data, params, fixed=fixed, signals=args.signal,
+            fit = fit_trace(build, data, params, fixed=fixed,
                             node=args.node, max_nfev=args.max_nfev, pool=pool)
         finally:
             if pool is not None:
@@ -203,6 +229,6 @@ def _run(args, build, params, fixed, say):
         text = fit.report()
     out["phase_rms"] = json.loads(fit.phase_rms.to_json(orient="records"))
     if args.plot:
-        out["plot"] = str(plot_fit(fit, args.data, args.plot))
+        out["plot"] = str(plot_fit(fit, data, args.plot))
         text += f"\nplot -> {out['plot']}"
     return out, text

@@ -3,10 +3,9 @@ with checks that name the file, the column and what to do; which samples are com
 (jumping signals); the split into fitted and held-out cycles."""
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 
+from ..csvdata import TRACE_MAX_ROWS, column_unit, missing_column, nonfinite_rows, open_csv
 from ..errors import DataError
 
 #: a sample step larger than this fraction of the signal's range (and than 8 typical
@@ -16,65 +15,139 @@ JUMP_FRACTION = 0.25
 JUMP_HALF_WIDTH = 2
 
 
-def read_trace(path_or_frame, signals=None):
+def read_trace(path_or_frame, signals=None, *, max_rows: int | None = TRACE_MAX_ROWS):
     """A recorded transient as a DataFrame: ``time_s`` then ``p_<node>_kPa`` /
     ``mdot_<element>_mg_s`` columns (``signals``: only these); ``#`` lines are comments.
 
-    Raises :class:`DataError` naming the file and column for: a missing file or
-    ``time_s``, no signal column, a requested column missing, NaN or non-numeric
-    values, times that do not increase strictly, fewer than 5 rows."""
+    Read by :mod:`pneunet.csvdata` (file:line errors, streamed, thinned past
+    ``max_rows`` rows).  Columns named in another unit (``p_tank_bar``, ``p_tank_kpa``,
+    ``mdot_R1_g_s``, ``time_ms``) are converted; a recording that does not start at
+    t = 0 is shifted to start there (the simulation starts at the first sample).  Each
+    conversion and shift is listed in ``df.attrs["notes"]``; ``df.attrs["source"]``
+    names the file.  Raises :class:`DataError` naming the file, the column and the
+    line for: a missing file or time column, a column that is not a signal, a
+    requested signal missing, gauge pressures, NaN/inf or text cells, times that do
+    not increase strictly, fewer than 5 rows."""
     import pandas as pd
 
     if isinstance(path_or_frame, pd.DataFrame):
-        df = path_or_frame.copy()
-        where = "trace"
+        where = path_or_frame.attrs.get("source", "trace")
+        notes = list(path_or_frame.attrs.get("notes", []))
+        rename, units = _plan(list(path_or_frame.columns), signals, where, notes)
+        wanted = ["time_s"] + [c for c in units if c != "time_s"]
+        df = path_or_frame.rename(columns=rename)[wanted].copy()
+        df.insert(0, "row", np.arange(1, len(df) + 1))
+        for c in wanted:
+            values = pd.to_numeric(df[c], errors="coerce")
+            text = values.isna() & df[c].notna()
+            if text.any():
+                raise DataError(f"column {c}: {df[c][text].iloc[0]!r} is not a number "
+                                f"(data row {int(df['row'][text].iloc[0])})", where=where,
+                                hint="only numbers in data columns")
+            df[c] = values.astype(float)
     else:
-        where = str(path_or_frame)
-        if not Path(where).exists():
-            raise DataError(f"no such file: {where}", hint="give the path of a CSV recording")
+        notes = []
+        csv_file = open_csv(path_or_frame)
+        where = csv_file.source
+        rename, units = _plan(csv_file.columns, signals, where, notes)
+        wanted = ["time_s"] + [c for c in units if c != "time_s"]
+        inverse = {new: old for old, new in rename.items()}
+        table = csv_file.read([inverse.get(c, c) for c in wanted], max_rows=max_rows,
+                              what="samples")
+        notes.extend(table.notes)
+        df = table.frame.rename(columns=rename)[["row", "line"] + wanted]
+    _convert(df, units, where)
+    _check_values(df, wanted, where)
+    t = df["time_s"].to_numpy()
+    if t[0] != 0:
+        notes.append(f"time_s starts at {t[0]:g} s: shifted to start at 0 (the simulation "
+                     "starts at the first sample)")
+        df["time_s"] = t - t[0]
+    out = df[wanted].reset_index(drop=True)
+    out.attrs.update(source=where, notes=notes)
+    return out
+
+
+def _plan(columns, signals, where, notes):
+    """A recording's header read: ({file name: canonical name}, {canonical name:
+    ColumnUnit} of time_s and the signals used); DataError for a missing time column,
+    a column that is no signal, a requested signal missing, a gauge column."""
+    rename, units, other = {}, {}, []
+    for name in map(str, columns):
         try:
-            df = pd.read_csv(where, comment="#")
-        except (ValueError, pd.errors.ParserError) as err:
-            raise DataError(f"cannot read the recording as CSV: {err}", where=where) from None
-    if "time_s" not in df.columns:
-        raise DataError("a transient recording needs a time_s column", where=where,
-                        hint="columns found: " + ", ".join(map(str, df.columns))
-                        + "; rename the time column to time_s (seconds)")
-    cols = [c for c in df.columns if c != "time_s"]
-    known = [c for c in cols if (c.startswith("p_") and c.endswith("_kPa"))
-             or (c.startswith("mdot_") and c.endswith("_mg_s"))]
+            cu = column_unit(name)
+        except DataError as err:
+            raise DataError(err.message, where=where, hint=err.hint) from None
+        if cu is None or cu.stem in ("p", "mdot"):
+            other.append(name)
+            continue
+        if cu.gauge:
+            raise DataError(f"column {name} holds gauge pressures", where=where,
+                            hint=f"a recording needs absolute pressures: add the ambient "
+                                 f"pressure and name the column {cu.canonical}")
+        if name != cu.canonical:
+            rename[name] = cu.canonical
+            notes.append(f"column {name} read as {cu.canonical} (unit {cu.pint_unit})")
+        units[cu.canonical] = cu
+    if "time_s" not in units:
+        raise missing_column(where, "time_s", columns,
+                             hint="rename the time column to time_s (seconds)")
+    known = [c for c in units if c != "time_s"]
     if not known:
         raise DataError("no signal columns named p_<node>_kPa or mdot_<element>_mg_s",
-                        where=where, hint="columns found: " + ", ".join(map(str, cols)))
+                        where=where, hint="columns found: " + ", ".join(map(str, columns)))
     if signals:
-        missing = [s for s in signals if s not in df.columns]
-        if missing:
-            raise DataError(f"column {missing[0]} is not in the recording", where=where,
-                            hint="recorded signal columns: " + ", ".join(known))
-        known = list(signals)
-    df = df[["time_s"] + known]
-    for c in df.columns:
-        v = pd.to_numeric(df[c], errors="coerce")
-        bad = np.flatnonzero(~np.isfinite(v.to_numpy(float)))
-        if bad.size:
-            rows = ", ".join(str(i + 1) for i in bad[:3]) + (" …" if bad.size > 3 else "")
-            raise DataError(f"column {c} has {bad.size} missing or non-numeric value(s) "
-                            f"(data rows {rows})", where=where,
-                            hint="remove those rows, or fill them (e.g. interpolate) before "
-                                 "fitting")
-        df[c] = v.astype(float)
+        chosen = [rename.get(s, s) for s in signals]
+        for s, c in zip(signals, chosen):
+            if c not in units:
+                raise missing_column(where, s, known, hint="recorded signal columns: "
+                                     + ", ".join(known))
+        return rename, {c: units[c] for c in ["time_s"] + chosen}
+    if other:
+        raise DataError(f"column {other[0]} is not a signal (p_<node>_<pressure unit> or "
+                        f"mdot_<element>_<flow unit>)", where=where,
+                        hint="rename it (units: kPa, bar, psi, Pa, MPa; mg_s, g_s, L_min), "
+                             "delete it, or pick the fitted columns with --signal")
+    return rename, {"time_s": units["time_s"], **{c: units[c] for c in known}}
+
+
+def _convert(df, units, where) -> None:
+    from ..errors import ParameterError
+    from ..units import to_internal
+
+    for c, cu in units.items():
+        if not cu.is_canonical:
+            try:
+                df[c] = to_internal(df[c].to_numpy(), cu.pint_unit, cu.kind, name=c)
+            except ParameterError as err:
+                raise DataError(err.message, where=where, hint=err.hint) from None
+
+
+def _check_values(df, columns, where) -> None:
+    """NaN/inf cells, too few rows, times that do not increase: DataError at the line."""
+    at = "line" if "line" in df else "row"
+
+    def place(i):
+        return f"{'line' if at == 'line' else 'data row'} {int(df[at].iloc[i])}"
+
+    column, bad = nonfinite_rows(df, columns)
+    if column is not None:
+        i = np.flatnonzero(bad)
+        more = f" and {i.size - 1} more" if i.size > 1 else ""
+        raise DataError(f"column {column} has a missing, NaN or infinite value at {place(i[0])}"
+                        f"{more}", where=where,
+                        hint="remove those rows, or fill them (e.g. interpolate) before fitting")
     t = df["time_s"].to_numpy()
     if len(t) < 5:
         raise DataError(f"only {len(t)} rows; a recording needs many samples per cycle",
-                        where=where)
+                        where=where, hint="record at least 5 samples (many per cycle)")
     step = np.diff(t)
     if np.any(step <= 0):
         i = int(np.flatnonzero(step <= 0)[0])
         what = "repeats" if step[i] == 0 else "goes back"
-        raise DataError(f"column time_s {what} at data row {i + 2} (t = {t[i + 1]:g} s after "
+        raise DataError(f"column time_s {what} at {place(i + 1)} (t = {t[i + 1]:g} s after "
                         f"{t[i]:g} s)", where=where,
                         hint="sort the rows by time and drop duplicated time stamps")
-    return df.reset_index(drop=True)
 
 
 def signal_of_column(col: str) -> str:

@@ -243,8 +243,8 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
 
     say = progress or (lambda msg: None)
     wall = time.perf_counter()
-    where = str(data) if not hasattr(data, "columns") else "trace"
     df = read_trace(data, signals)
+    where = df.attrs["source"]
     train, test = split_by_cycles(df, node, train_fraction, where=where)
     timing = {}
     pool = process_pool(workers)

@@ -138,8 +138,8 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
     from .start import _feature_fit, initial_values
 
     wall = time.perf_counter()
-    where = where or (str(data) if not hasattr(data, "columns") else "trace")
     df = read_trace(data, signals)
+    where = where or df.attrs["source"]
     cols = [c for c in df.columns if c != "time_s"]
     sigs = [signal_of_column(c) for c in cols]
     times = df["time_s"].to_numpy()
