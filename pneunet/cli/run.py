@@ -114,6 +114,8 @@ def main(args) -> int:
                 result.plot(png, signals=saves or None)
                 files.append(str(png))
             say(f"  .{analysis.kind}: wrote {csv}")
+            if getattr(result, "stability", None) is not None:
+                say(f"    {result.stability.describe()}")
             stats = dict(getattr(result, "stats", {}) or {})
             if "solver_messages" in stats:
                 solver_messages[name] = stats.get("solver_diagnostics", {"count": 0})

@@ -15,6 +15,7 @@ from .assembly import CircuitDAE
 from .diagnostics import captured
 from ..errors import ParameterError, SolverError
 from .solution import LazySignals, OperatingPoint, Solution
+from .stability import linear_stability
 from .solvers import available_backends
 from .solvers.base import EVENT, FAILED, Segment
 from .solvers.newton import DENSE_LIMIT, newton
@@ -55,8 +56,9 @@ def consistent_state(dae, t, y_guess):
     return result.y, dae.derivative(t, result.y)
 
 
-def operating_point(circuit, *, t: float = 0.0) -> OperatingPoint:
-    """Steady state (ẏ = 0) of the circuit with its sources at time ``t``."""
+def operating_point(circuit, *, t: float = 0.0, stability: bool = True) -> OperatingPoint:
+    """Steady state (ẏ = 0) of the circuit with its sources at time ``t``, and (unless
+    ``stability`` is False) whether it settles there (:mod:`~pneunet.engine.stability`)."""
     dae = CircuitDAE(circuit)
     y0 = dae.initial_state(t)
     everything = np.arange(dae.n)
@@ -74,7 +76,8 @@ def operating_point(circuit, *, t: float = 0.0) -> OperatingPoint:
     pressures = {k[2:]: float(v[0]) for k, v in sol.signals.items() if sol.units[k] == "kPa"
                  and k.startswith("p_")}
     flows = {k[5:]: float(v[0]) for k, v in sol.signals.items() if k.startswith("mdot_")}
-    return OperatingPoint(pressures, flows, result.residual)
+    return OperatingPoint(pressures, flows, result.residual,
+                          linear_stability(dae, t, result.y) if stability else None)
 
 
 @captured
@@ -109,7 +112,7 @@ def transient(circuit, t_stop: float, *, t_step: float | None = None, t_start: f
     dae = CircuitDAE(circuit)
     opts = circuit.options
     if start == "op":
-        op = operating_point(circuit, t=t_start)
+        op = operating_point(circuit, t=t_start, stability=False)
         y0 = np.array([op.pressures[n] for n in dae.node_names])
     elif start == "ic":
         y0 = dae.initial_state(t_start)

@@ -188,11 +188,14 @@ class Solution:
 
 @dataclass(frozen=True)
 class OperatingPoint:
-    """A steady state: node pressures (kPa) and element flows (mg/s)."""
+    """A steady state: node pressures (kPa), element flows (mg/s), the flow imbalance
+    left by Newton (mg/s) and whether the circuit settles there
+    (:class:`~pneunet.engine.stability.Stability`: ``op.stability.stable``)."""
 
     pressures: Mapping[str, float]
     flows: Mapping[str, float]
     residual: float = 0.0
+    stability: Any = None
 
     def __post_init__(self):
         object.__setattr__(self, "pressures", MappingProxyType(dict(self.pressures)))
@@ -213,4 +216,6 @@ class OperatingPoint:
     def __str__(self) -> str:
         lines = [f"  p({k}) = {v:.4f} kPa" for k, v in self.pressures.items()]
         lines += [f"  mdot({k}) = {v:.4f} mg/s" for k, v in self.flows.items()]
+        if self.stability is not None:
+            lines.append("  " + self.stability.describe())
         return "operating point\n" + "\n".join(lines)
