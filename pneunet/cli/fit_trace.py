@@ -139,8 +139,11 @@ def main(args) -> int:
         if not quiet:
             print(f"fit-trace: {msg}", file=sys.stderr, flush=True)
 
-    with stdout_to_stderr(args.json):
+    from ..engine.diagnostics import collect, summarize
+
+    with stdout_to_stderr(args.json), collect() as heard:
         out, text = _run(args, data, build, params, fixed, say)
+    out["solver_messages"] = summarize(heard)  # this process's simulations, not the workers'
     if args.json:
         print(json.dumps(_finite(out), indent=1, default=_json_default, allow_nan=False))
     else:

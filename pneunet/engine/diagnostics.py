@@ -270,6 +270,18 @@ def captured(solve):
 _listeners: list[list] = []
 
 
+def summarize(heard: list[Diagnostics]) -> dict:
+    """JSON-ready totals over simulations: messages, simulations with messages, stopped
+    simulations, and messages by kind."""
+    kinds: dict[str, int] = {}
+    for diagnostics in heard:
+        for kind, entry in diagnostics.kinds().items():
+            kinds[kind] = kinds.get(kind, 0) + entry["count"]
+    return {"count": sum(kinds.values()), "simulations": len(heard),
+            "with_messages": sum(bool(d.messages) for d in heard),
+            "stopped": sum(not d.recovered for d in heard), "kinds": kinds}
+
+
 @contextlib.contextmanager
 def collect():
     """Gather the :class:`Diagnostics` of every simulation run inside the block (a list)."""

@@ -58,6 +58,7 @@ def test_json_is_the_only_thing_on_stdout(tmp_path, capfd, record):
     assert code == 0
     assert not RAW_SUNDIALS.search(out + err)  # no SUNDIALS line on fd 1 or 2 (issue 16)
     j = json.loads(out)  # nothing but JSON
+    assert j["solver_messages"]["simulations"] > 0 and j["solver_messages"]["stopped"] == 0
     assert set(j["fit"]["values"]) == {"Rvent"}
     lo, hi = j["fit"]["ci"]["Rvent"]
     assert lo < j["fit"]["values"]["Rvent"] < hi
