@@ -59,8 +59,15 @@ def truth_table(build, inputs: dict, outputs: list, *, low: float = 96.0, high: 
     """
     import pandas as pd
 
-    from .sweep import apply_overrides
+    from .sweep import apply_overrides, require_builder
 
+    require_builder(build, "truth_table")
+    if not isinstance(inputs, dict) or not inputs:
+        raise PneunetError(f"truth_table inputs must be a dict {{logic name: pressure source "
+                           f"element}}, e.g. {{'A': 'Pin'}}, got {inputs!r}")
+    if isinstance(outputs, str) or not all(isinstance(o, str) for o in outputs):
+        raise PneunetError(f"truth_table outputs must be a list of node names, e.g. ['out'], "
+                           f"got {outputs!r}")
     threshold = 0.5 * (low + high) if threshold is None else threshold
     band = settle_band * (high - low)
     names = list(inputs)
@@ -74,7 +81,12 @@ def truth_table(build, inputs: dict, outputs: list, *, low: float = 96.0, high: 
 
     # the state with all inputs low, settled by a transient (an operating-point solve can
     # land anywhere on a node isolated by closed valves)
-    settled = circuit((0,) * len(names)).tran(t_settle).final()
+    first = circuit((0,) * len(names))
+    missing = [node for node in outputs if node not in first.nodes]
+    if missing:
+        raise PneunetError(f"truth_table outputs {missing} are not nodes of the circuit",
+                           hint="nodes: " + ", ".join(first.nodes))
+    settled = first.tran(t_settle).final()
     base_p = {k[2:]: v for k, v in settled.items() if k.startswith("p_")}
     rows = []
     for bits in itertools.product((0, 1), repeat=len(names)):

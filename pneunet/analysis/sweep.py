@@ -141,6 +141,20 @@ def point_key(point: dict) -> str:
 
 
 # -- circuits -----------------------------------------------------------------------------
+def require_builder(build, caller: str) -> None:
+    """A PneunetError unless ``build`` is a function from a point to a Circuit."""
+    if callable(build):
+        return
+    from ..engine.circuit import Circuit
+
+    got = "a Circuit" if isinstance(build, Circuit) else f"a {type(build).__name__}"
+    raise PneunetError(
+        f"{caller} takes a function from a point (dict of parameter values, for logic "
+        f"inputs {{'SOURCE.value': kPa}}) to a Circuit, got {got}",
+        hint="for a netlist pass NetlistBuilder('file.pn'); in Python a function "
+             "build(point) that returns a new Circuit, e.g. pneunet.analysis.circuits.inverter")
+
+
 def apply_overrides(circuit, point: dict):
     """Set ``ELEMENT.PARAM`` entries of ``point`` on ``circuit`` (in place; returns it)."""
     import dataclasses
@@ -353,6 +367,7 @@ def run_sweep(build: Callable, points: Sequence[dict], analysis: Callable | None
     """
     import pandas as pd
 
+    require_builder(build, "run_sweep")
     analysis = analysis or OscillationMeasure()
     points = [{k: _plain(v) for k, v in p.items()} for p in points]
     keys = [point_key(p) for p in points]
