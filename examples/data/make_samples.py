@@ -1,5 +1,6 @@
 """Write the sample measurement files of the README's ``fit``, ``diagnose`` and
-``fit-trace`` commands (run from anywhere: ``python examples/data/make_samples.py``).
+``fit-trace`` commands (run from anywhere: ``python examples/data/make_samples.py [OUT_DIR]``, default
+this directory).
 
 * ``bench_axi.csv`` — static bench data of the paper's axi valve from the virtual bench
   (:func:`pneunet.identify.simulate_bench`: the paper's protocol, 4410 held points in
@@ -48,7 +49,14 @@ def recording(path: Path) -> None:
         frame.to_csv(fh, index=False, float_format="%.4f", lineterminator="\n")
 
 
+def main(out: Path = HERE) -> None:
+    out.mkdir(parents=True, exist_ok=True)
+    bench(out / "bench_axi.csv")
+    recording(out / "oscillator_rec.csv")
+    print(f"wrote {out / 'bench_axi.csv'} and {out / 'oscillator_rec.csv'}")
+
+
 if __name__ == "__main__":
-    bench(HERE / "bench_axi.csv")
-    recording(HERE / "oscillator_rec.csv")
-    print(f"wrote {HERE / 'bench_axi.csv'} and {HERE / 'oscillator_rec.csv'}")
+    import sys
+
+    main(Path(sys.argv[1]) if len(sys.argv) > 1 else HERE)

@@ -362,14 +362,12 @@ def _diagnose(data, *, effects, n_splits, z, min_gain, max_effects, mdot_min, sc
 def _as_frame(data, load_options):
     import pandas as pd
 
+    from ..identify import load_measurements
+
     if isinstance(data, pd.DataFrame):
         return data
     if hasattr(data, "frame"):
         return data.frame
-    try:
-        from ..identify import load_measurements
-    except ImportError:
-        return pd.read_csv(data, comment="#")
     return load_measurements(data, **load_options).frame
 
 
