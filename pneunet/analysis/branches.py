@@ -21,12 +21,13 @@ p_c,max the upper one (in the limit of vanishing dead volume).
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..errors import PneunetError
-from ..laws import valve_conductance
+from ..laws import Scalar, valve_conductance
 from ..valve_params import ValveParams
 
 
@@ -119,12 +120,16 @@ class _Curve:
         self.band = band
 
     def F(self, pc, m):
+        """F (mg/s) at p_c (kPa), ṁ (mg/s): Python floats (laws.Scalar, the curve is
+        traced point by point)."""
         s, v = self.s, self.v
-        pout = np.sqrt(m * m * s.Rout ** 2 + pc * pc)
+        pc, m = float(pc), float(m)
+        pout = math.sqrt(m * m * s.Rout ** 2 + pc * pc)
         dp = v.ain * s.pH + v.aout * pout - pc
-        g, _ = valve_conductance(dp, v.Rf, v.pclose, v.ptrans, v.e)
+        g, _ = valve_conductance(dp, v.Rf, v.pclose, v.ptrans, v.e, derivative=False, xp=Scalar)
         d = s.pH ** 2 - pout ** 2
-        root = np.sign(d) * np.sqrt(np.abs(d)) if self.band == 0 else d / (d * d + self.band ** 2) ** 0.25
+        root = math.copysign(math.sqrt(abs(d)), d) if self.band == 0 \
+            else d / (d * d + self.band ** 2) ** 0.25
         return m - g * root
 
     def grad(self, pc, m):

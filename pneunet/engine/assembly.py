@@ -344,6 +344,7 @@ class AlgebraicBlock:
         local = np.full(dae.n + len(dae.fixed_names), -1)
         local[alg] = np.arange(na)
         self._parts, flow_to, pair_to = [], [], []
+        n_flows = n_pairs = 0
         for block in dae._active:
             on = local[block.port_node] >= 0
             members = np.flatnonzero(on.any(axis=1))
@@ -354,12 +355,16 @@ class AlgebraicBlock:
                 fam = type(fam)([fam.specs[k] for k in members], fam.context)
             at, on = local[block.port_node[members]], on[members]
             pairs = on[:, :, None] & on[:, None, :]
-            self._parts.append((fam, block.port_node[members], np.flatnonzero(on.ravel()),
-                                np.flatnonzero(pairs.ravel()),
-                                np.zeros(block.port_node[members].shape)))
+            flow_at, pair_at = np.flatnonzero(on.ravel()), np.flatnonzero(pairs.ravel())
+            flows_end, pairs_end = n_flows + flow_at.size, n_pairs + pair_at.size
+            self._parts.append((fam, block.port_node[members], flow_at, pair_at,
+                                np.zeros(block.port_node[members].shape),
+                                slice(n_flows, flows_end), slice(n_pairs, pairs_end)))
+            n_flows, n_pairs = flows_end, pairs_end
             flow_to.append(at[on])
             pair_to.append((np.broadcast_to(at[:, :, None], pairs.shape)[pairs],
                             np.broadcast_to(at[:, None, :], pairs.shape)[pairs]))
+        self._flows, self._partials = np.zeros(n_flows), np.zeros(n_pairs)
         self._flow_to = np.concatenate(flow_to) if flow_to else np.empty(0, int)
         rows = np.concatenate([r for r, _ in pair_to]) if pair_to else np.empty(0, int)
         cols = np.concatenate([c for _, c in pair_to]) if pair_to else np.empty(0, int)
@@ -380,15 +385,13 @@ class AlgebraicBlock:
         """(F_a or None, J_aa, s_a): s_a the row scale Σ|contribution| of each algebraic
         equation over its algebraic columns (mg/(s·kPa)), floored at 1e-300."""
         p, _ = self.dae._pressures_at(t, y)
-        flows, partials = [], []
-        for fam, nodes, flow_at, pair_at, zeros in self._parts:
+        flows, partials = self._flows, self._partials
+        for fam, nodes, flow_at, pair_at, zeros, flow_slice, pair_slice in self._parts:
             q, dq_dp, _ = fam.outflows(t, p[nodes], zeros)
             if residual:
-                flows.append(q.ravel()[flow_at])
-            partials.append(dq_dp.ravel()[pair_at])
-        partials = np.concatenate(partials)
-        res = np.bincount(self._flow_to, weights=np.concatenate(flows),
-                          minlength=self.size) if residual else None
+                flows[flow_slice] = q.ravel()[flow_at]
+            partials[pair_slice] = dq_dp.ravel()[pair_at]
+        res = np.bincount(self._flow_to, weights=flows, minlength=self.size) if residual else None
         data = np.bincount(self._pair_to, weights=partials, minlength=self._n_entries)
         scale = np.bincount(self._rows, weights=np.abs(partials), minlength=self.size)
         if self.dense:
