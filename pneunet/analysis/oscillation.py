@@ -12,10 +12,11 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from ..errors import PneunetError
+from ..reprs import Summarized, number
 
 
-@dataclass(frozen=True)
-class Oscillation:
+@dataclass(frozen=True, repr=False)
+class Oscillation(Summarized):
     """Result of :func:`analyze_oscillation`.
 
     kind        'limit_cycle' (sustained), 'decaying', 'growing', 'equilibrium', or
@@ -44,6 +45,13 @@ class Oscillation:
     @property
     def oscillating(self) -> bool:
         return self.kind == "limit_cycle"
+
+    def _summary(self):
+        rows = [("period", number(self.period_s, "s")),
+                ("duty cycle", number(self.duty_cycle, "", 3)),
+                ("pressure", f"{self.p_min:.4g}–{self.p_max:.4g} kPa"),
+                ("cycles", str(self.cycles)), ("converged", str(self.converged))]
+        return self.kind, rows, ".as_dict() for every field"
 
     def as_dict(self) -> dict:
         d = asdict(self)
@@ -122,14 +130,20 @@ def analyze_oscillation(t, y, *, rtol: float = 1e-3, min_amplitude: float = 1.0,
                        len(periods), ratio, change, converged)
 
 
-@dataclass(frozen=True)
-class PeriodResult:
-    """Result of :func:`oscillator_period`: the analysis, the solution and the time simulated."""
+@dataclass(frozen=True, repr=False)
+class PeriodResult(Summarized):
+    """Result of :func:`oscillator_period`: the analysis, the solution and the time
+    simulated (s) over ``runs`` transients."""
 
     oscillation: Oscillation
     solution: object
     t_simulated: float
     runs: int
+
+    def _summary(self):
+        title, rows, _ = self.oscillation._summary()
+        rows.append(("simulated", f"{self.t_simulated:g} s in {self.runs} run(s)"))
+        return title, rows, ".oscillation (all measures), .solution (the last transient)"
 
     @property
     def period_s(self) -> float:

@@ -14,6 +14,7 @@ from typing import Any, Callable, Mapping
 import numpy as np
 
 from ..errors import PneunetError
+from ..reprs import Summarized, listed, number
 
 
 def column_name(signal: str, unit: str) -> str:
@@ -87,8 +88,8 @@ class LazySignals(Mapping):
         return name in self._values or name in self._pending
 
 
-@dataclass(frozen=True)
-class Solution:
+@dataclass(frozen=True, repr=False)
+class Solution(Summarized):
     """A transient result: time points and named signals (read-only arrays).
 
     ``signals`` is a mapping; element signals of simulated circuits are computed
@@ -124,6 +125,23 @@ class Solution:
             raise PneunetError(f"no signal {name!r} in this solution",
                                hint=f"did you mean {close[0]!r}?" if close else
                                "signals: " + ", ".join(self.signals)) from None
+
+    def _summary(self):
+        stats = self.stats
+        rows = [("time", f"{self.t[0]:g}–{self.t[-1]:g} s" if self.t.size else "empty"),
+                ("points", str(self.t.size)),
+                ("signals", f"{len(self.signals)} ({listed(self.signals, 4)})")]
+        if self.jumps:
+            rows.append(("branch jumps", str(len(self.jumps))))
+        if "steps" in stats:
+            rows.append(("solver", f"{stats.get('backend', 'IDA')}, {stats['steps']} steps in "
+                                   f"{number(stats.get('wall_time_s'), 's', 3)}"))
+        if stats.get("solver_messages"):
+            rows.append(("solver messages", f"{stats['solver_messages']} (stats"
+                                            "['solver_diagnostics'])"))
+        return (repr(self.title) if self.title else "transient", rows,
+                "sol.pressure(node), sol.flow(element), sol.at(t), sol.final(), sol.stats, "
+                "sol.to_pandas(), sol.plot()")
 
     def pressure(self, node: str) -> np.ndarray:
         """Absolute pressure of ``node`` over time, kPa."""
@@ -186,8 +204,8 @@ class Solution:
         return save(fig, path) if path is not None else fig
 
 
-@dataclass(frozen=True)
-class OperatingPoint:
+@dataclass(frozen=True, repr=False)
+class OperatingPoint(Summarized):
     """A steady state: node pressures (kPa), element flows (mg/s), the flow imbalance
     left by Newton (mg/s) and whether the circuit settles there
     (:class:`~pneunet.engine.stability.Stability`: ``op.stability.stable``)."""
@@ -200,6 +218,18 @@ class OperatingPoint:
     def __post_init__(self):
         object.__setattr__(self, "pressures", MappingProxyType(dict(self.pressures)))
         object.__setattr__(self, "flows", MappingProxyType(dict(self.flows)))
+
+    def _summary(self):
+        rows = [("pressures", listed((f"{k} {v:.4g} kPa" for k, v in self.pressures.items()),
+                                     4)),
+                ("flows", f"{len(self.flows)} elements")]
+        if self.stability is not None and self.stability.stable is not None:
+            lam = self.stability.slowest
+            rows.append(("stability", ("stable" if self.stability.stable else "UNSTABLE") +
+                         (f" (slowest eigenvalue {lam.real:+.3g} 1/s)" if lam is not None
+                          else "")))
+        return ("", rows, "op.pressures, op.flows, op.stability.describe(), print(op), "
+                          "op.to_pandas()")
 
     def table(self) -> dict[str, list]:
         """Columns ``signal``, ``value`` (kPa or mg/s) and ``unit``."""
