@@ -22,7 +22,18 @@ def oscillator(params: dict | None = None, **options) -> Circuit:
     from ..paper_circuits import oscillator as build
 
     p = dict(OSCILLATOR_DEFAULTS)
-    p.update(params or {})
+    plain = {k: v for k, v in (params or {}).items() if "." not in k}  # dotted: element params
+    unknown = sorted(set(plain) - set(OSCILLATOR_DEFAULTS))
+    if unknown:
+        import difflib
+
+        from ..errors import ParameterError
+
+        close = difflib.get_close_matches(unknown[0], OSCILLATOR_DEFAULTS, n=1)
+        raise ParameterError(f"the oscillator has no parameter {unknown[0]!r}",
+                             hint=f"did you mean {close[0]!r}?" if close else
+                             "parameters: " + ", ".join(OSCILLATOR_DEFAULTS))
+    p.update(plain)
     opts = {"ambient": p["ambient"]}
     if p["dead_volume"]:
         opts["dead_volume"] = p["dead_volume"]

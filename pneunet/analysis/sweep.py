@@ -166,8 +166,8 @@ def apply_overrides(circuit, point: dict):
             continue
         name, param = key.rsplit(".", 1)  # element names of subcircuits contain dots
         if name not in circuit.elements:
-            raise ParameterError(f"sweep parameter {key}: no element {name!r}",
-                                 hint="elements: " + ", ".join(circuit.elements))
+            raise ParameterError(f"parameter {key}: no element {name!r}",
+                                 hint=_did_you_mean(name, circuit.elements, "elements"))
         spec = circuit.elements[name]
         model = spec.params.get("model")
         if param not in spec.params and isinstance(model, ValveParams) and hasattr(model, param):
@@ -181,23 +181,49 @@ def apply_overrides(circuit, point: dict):
             else:
                 spec.params[param] = float(value)
         else:
-            raise ParameterError(f"sweep parameter {key}: {name} has no parameter {param!r}",
-                                 hint="parameters: " + ", ".join(spec.params))
+            known = list(spec.params)
+            if isinstance(model, ValveParams):
+                known += [f.name for f in dataclasses.fields(model)]
+            raise ParameterError(f"parameter {key}: {name} has no parameter {param!r}",
+                                 hint=_did_you_mean(param, known, "parameters"))
     return circuit
+
+
+def _did_you_mean(name, known, what) -> str:
+    import difflib
+
+    close = difflib.get_close_matches(name, list(known), n=1)
+    return f"did you mean {close[0]!r}?" if close else f"{what}: " + ", ".join(known)
+
+
+def check_points(build, points: list) -> None:
+    """Before any work: every value is finite, and building the first point (without
+    simulating it) knows every name (a plain name that is no ``.param``, ``X1.pclos``: an
+    error with a did-you-mean)."""
+    import math
+
+    for point in points:
+        for key, value in point.items():
+            if isinstance(value, float) and not math.isfinite(value):
+                raise ParameterError(f"sweep parameter {key} = {value}: not a finite number")
+    if points:
+        apply_overrides(build(points[0]), points[0])
 
 
 class NetlistBuilder:
     """``build(point)`` for a netlist: plain names override ``.param`` values, dotted
     names set element parameters.  Uses the netlist package's ``parse_file``."""
 
-    def __init__(self, path, **options):
+    def __init__(self, path, parse: dict | None = None, **options):
         self.path = str(path)
+        self.parse = dict(parse or {})  # parse_file's limits and include_path
         self.options = options
 
     def __call__(self, point: dict):
         from ..netlist import parse_file
 
-        deck = parse_file(self.path, overrides={k: v for k, v in point.items() if "." not in k})
+        deck = parse_file(self.path, overrides={k: v for k, v in point.items() if "." not in k},
+                          **self.parse)
         circuit = apply_overrides(deck.circuit, point)
         if self.options:
             circuit.options = circuit.options.replace(**self.options)
@@ -206,17 +232,18 @@ class NetlistBuilder:
     def deck(self, point: dict | None = None):
         from ..netlist import parse_file
 
-        return parse_file(self.path, overrides={k: v for k, v in (point or {}).items() if "." not in k})
+        return parse_file(self.path, overrides={k: v for k, v in (point or {}).items()
+                                                if "." not in k}, **self.parse)
 
     def __repr__(self):
         return f"NetlistBuilder({self.path!r})"
 
 
-def netlist_steps(path) -> list[dict]:
+def netlist_steps(path, **parse) -> list[dict]:
     """The points of a netlist's ``.step`` statements ([{}] without any)."""
     from ..netlist import parse_file
 
-    return parse_file(path).step_points()
+    return parse_file(path, **parse).step_points()
 
 
 # -- analyses -----------------------------------------------------------------------------

@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import json
 
+from . import netlist_args
+
 
 def register(subparsers) -> None:
     p = subparsers.add_parser(
@@ -24,6 +26,7 @@ def register(subparsers) -> None:
     p.add_argument("--plot", metavar="PNG", default=None, help="write the Fig. 11 style plot")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    netlist_args.add(p)
     p.set_defaults(func=main)
 
 
@@ -34,7 +37,8 @@ def main(args) -> int:
     if args.netlist:
         from ..netlist import parse_file
 
-        circuit = parse_file(args.netlist).circuit
+        circuit = parse_file(args.netlist, **netlist_args.parse_options(args)).circuit
+        netlist_args.check_nodes(circuit, args.strict)
         spec = spec_from_circuit(circuit, args.node)
     else:
         spec = OscillatorSpec(pH=args.pH, pL=args.pL, Rout=args.rout, Rvent=args.rvent,

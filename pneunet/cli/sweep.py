@@ -5,6 +5,8 @@ import json
 import sys
 from pathlib import Path
 
+from . import netlist_args
+
 
 def register(subparsers) -> None:
     p = subparsers.add_parser(
@@ -54,6 +56,7 @@ def register(subparsers) -> None:
                    help="regime map (two axes) or measurement vs parameter (one axis)")
     p.add_argument("--json", action="store_true", help="print a JSON summary with all rows")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    netlist_args.add(p)
     p.set_defaults(func=main)
 
 
@@ -73,8 +76,11 @@ def main(args) -> int:
             raise ParameterError(f"bad tolerance {t!r}", hint="NAME=NOMINAL:PLUSMINUS") from None
         dists[name] = S.tolerance(nominal, pm)
     if args.netlist:
-        build = S.NetlistBuilder(args.netlist)
+        parse = netlist_args.parse_options(args)
+        build = S.NetlistBuilder(args.netlist, parse=parse)
         deck = build.deck()
+        deck.circuit.validate()
+        netlist_args.check_nodes(deck.circuit, args.strict)
         has_meas = bool(deck.measures)
     else:
         from ..analysis.circuits import oscillator as build
@@ -90,12 +96,13 @@ def main(args) -> int:
     elif axes:
         points = S.grid(*axes)
     elif args.netlist:
-        points = S.netlist_steps(args.netlist)
+        points = S.netlist_steps(args.netlist, **parse)
         if points == [{}]:
             raise ParameterError("nothing to sweep", hint="add --param or .step lines")
     else:
         raise ParameterError("nothing to sweep", hint="add --param NAME=lin:START:STOP:N")
 
+    S.check_points(build, points)
     kind = args.analysis or ("meas" if has_meas and not axes_are_oscillator(args) else "regime")
     if kind == "meas":
         if not args.netlist:

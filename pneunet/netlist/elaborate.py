@@ -161,6 +161,7 @@ class _Builder:
                            _close(st.keyword, DIRECTIVES))
         self.options = self._options([st for st in top if st.keyword in (".options", ".option")])
         set_expression_ambient(self.options.ambient)
+        self._check_overrides(top)
         self.scope = Scope(dict(self.overrides))
         for st in top:
             if st.keyword == ".param":
@@ -206,6 +207,20 @@ class _Builder:
                        f"points ({self.limits.exceeded('max_sweep_points')})",
                        deck.steps[-1].span, self.limits.hint("max_sweep_points"))
         return deck
+
+    def _check_overrides(self, top):
+        """Every overridden name (``--param``, ``--set``, ``.step`` values) is a ``.param``."""
+        declared = [it.key.text for st in top if st.keyword == ".param" for it in st.items[1:]
+                    if isinstance(it, Pair) and isinstance(it.key, Word)]
+        for name, value in self.overrides.items():
+            if name not in declared:
+                raise NetlistError(f"parameter {name!r} is not defined by a .param line",
+                                   where=self.source.file, hint=_close(name, declared) or
+                                   ("parameters: " + ", ".join(declared) if declared else
+                                    "the netlist has no .param lines"))
+            if not math.isfinite(value):
+                raise NetlistError(f"parameter {name} = {value}: not a finite number",
+                                   where=self.source.file)
 
     def _options(self, statements):
         from ..engine.options import SimulationOptions
@@ -769,6 +784,11 @@ class _Builder:
             raise _err(".step needs a parameter name", items[0] if items else st.span,
                        "e.g. .step param Rout list 0.566 1.132")
         name = items[0].text
+        declared = [it.key.text for s in self.source.top if s.keyword == ".param"
+                    for it in s.items[1:] if isinstance(it, Pair) and isinstance(it.key, Word)]
+        if name not in declared:
+            raise _err(f".step of {name!r}, which no .param line defines", items[0],
+                       _close(name, declared) or "define it first: .param NAME=value")
         values = self._sweep_values(st, items[1:], lambda w: self._scalar(w, self.scope))
         return Step(name, values, st.span)
 

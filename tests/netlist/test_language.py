@@ -147,7 +147,7 @@ def test_ic_and_gauge_with_ambient():
 
 
 def test_analyses_and_steps():
-    deck = parse_netlist(""".param R=1
+    deck = parse_netlist(""".param R=1 C=1
 P1 a 4bar
 R1 a b {R}
 V1 b 1mL
