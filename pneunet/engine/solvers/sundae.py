@@ -57,6 +57,7 @@ def _import_ida():
 ida = _import_ida()
 
 DENSE_LIMIT = 40  # unknowns up to which the dense linear solver is faster
+_STATUS = {0: OK, 1: TSTOP, 2: EVENT}  # IDA's return flags; any other is a failure
 
 
 class SundaeIntegrator(Integrator):
@@ -125,13 +126,10 @@ class SundaeIntegrator(Integrator):
 
     def step(self, target, tstop, onestep):
         r = self._solver.step(target, method="onestep" if onestep else "normal", tstop=tstop)
-        status = {0: OK, 1: TSTOP, 2: EVENT}.get(r.status, FAILED)
+        status = _STATUS.get(r.status, FAILED)
         if status == EVENT:
             self._forget_events()
-        t = float(np.atleast_1d(r.t)[-1])
-        y = np.array(r.y).reshape(-1, self.dae.n)[-1]
-        yp = np.array(r.yp).reshape(-1, self.dae.n)[-1]
-        return StepResult(status, t, y, yp, r.message)
+        return StepResult(status, float(r.t), r.y, r.yp, r.message)  # y, yp: fresh copies
 
     def _forget_events(self):
         """Empty the roots scikit-sundae keeps on the event function: it turns all of
