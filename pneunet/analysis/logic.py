@@ -22,10 +22,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import PneunetError
+from ..reprs import Summarized, listed
 
 
-@dataclass
-class TruthTable:
+@dataclass(repr=False)
+class TruthTable(Summarized):
     """``table``: one row per input combination; ``margins``: one row per output."""
 
     table: object
@@ -33,6 +34,15 @@ class TruthTable:
     inputs: dict
     outputs: list
     threshold: float
+
+    def _summary(self):
+        rows = [("inputs", listed(self.inputs)), ("outputs", listed(self.outputs)),
+                ("rows", str(len(self.table))), ("threshold", f"{self.threshold:.4g} kPa")]
+        if "ok" in self.table:
+            rows.append(("as expected", f"{int(self.table['ok'].sum())} of {len(self.table)}"))
+        if len(self.margins):
+            rows.append(("smallest margin", f"{self.margins['margin_kPa'].min():.4g} kPa"))
+        return "", rows, ".table, .margins, .ok(), plot_truth_table(tt)"
 
     def ok(self) -> bool:
         return bool(self.table["ok"].all()) if "ok" in self.table else True

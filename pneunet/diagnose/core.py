@@ -24,6 +24,7 @@ import numpy as np
 
 from ..effects import ValveModel, as_effect, available_effects
 from ..errors import ParameterError
+from ..reprs import Summarized, listed
 from .features import FEATURE_LABELS, feature_table, noise_floor, prepare
 from .fitting import (ModelFit, cross_validate, fit_model, group_bootstrap_weights, group_folds,
                       initial_params, model_inputs, predict, rmse_ci, rmse_diff_ci)
@@ -74,8 +75,8 @@ class Stage:
                 "cv_rmse": self.cv_rmse, "cv_rmse_se": self.cv_se}
 
 
-@dataclass
-class Diagnosis:
+@dataclass(repr=False)
+class Diagnosis(Summarized):
     """Everything :func:`diagnose` found; ``to_json()``, ``report()``, ``plots(dir)``."""
 
     data: object
@@ -86,6 +87,11 @@ class Diagnosis:
     notes: list
     settings: dict
     identification: object = None
+
+    def _summary(self):
+        rows = [("accepted", listed(self.accepted) or "nothing"),
+                ("stages", str(len(self.stages))), ("structure left", str(self.structure_left))]
+        return self.verdict, rows, ".report(), .to_json(), .plots(directory), .model, .stages"
 
     @property
     def baseline(self) -> Stage:

@@ -45,6 +45,7 @@ import numpy as np
 import pandas as pd
 
 from ..errors import DataError, ParameterError
+from ..reprs import Summarized, listed, number
 from ..valve_params import VALVE_PARAMETERS, ValveParams
 from .data import PRESSURES, Measurements, as_frame
 
@@ -318,8 +319,8 @@ def _unpack(p, pclose):
 
 
 # --------------------------------------------------------------------------- result
-@dataclass
-class ValveFit:
+@dataclass(repr=False)
+class ValveFit(Summarized):
     """Result of :func:`fit_valve`.
 
     ``params`` (ValveParams), ``stderr`` and ``ci95`` by parameter name, ``metrics``
@@ -342,6 +343,14 @@ class ValveFit:
     settings: dict = field(default_factory=dict)
     measurements: Measurements | None = None
     plane: tuple = ()
+
+    def _summary(self):
+        values = (f"{k} {getattr(self.params, k):.4g} {VALVE_PARAMETERS[k][0]}" for k in NAMES)
+        m = self.metrics
+        rows = [("parameters", listed(values)),
+                ("rms flow error", number(m.get("rmse"), "mg/s", 3)),
+                ("points", f"{m.get('n')} ({m.get('misclassified')} misclassified)")]
+        return "", rows, ".params, .stderr, .ci95, .report(), .model_card(name)"
 
     # ---- predictions
     def predict(self, frame) -> np.ndarray:

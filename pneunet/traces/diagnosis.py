@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import SolverError
+from ..reprs import Summarized, listed, number
 from ..truth.locate import best_lag, hot_phases, phase_profile
 from ..truth.noise import difference_sigma, segments
 from ..truth.verdict import TOLERANCE, Step, at_floor, decide
@@ -33,8 +34,8 @@ from .model import FIT_OPTIONS, TraceModel, TraceResidual
 from .data import compared_samples
 
 
-@dataclass
-class TraceDiagnosis:
+@dataclass(repr=False)
+class TraceDiagnosis(Summarized):
     """Everything :func:`diagnose_trace` found: ``to_json()``, ``report()``, ``plots()``."""
 
     verdict: str
@@ -50,6 +51,13 @@ class TraceDiagnosis:
     test_window: tuple
     timing: dict = field(default_factory=dict)
     notes: list = field(default_factory=list)
+
+    def _summary(self):
+        rows = [("accepted", listed(self.accepted) or "nothing"),
+                ("rms residual", number(self.final.error(), self.unit, 3)),
+                ("noise floor", number(self.noise_floor, self.unit, 3)),
+                ("candidates fitted", str(len(self.fits) - 1))]
+        return self.verdict, rows, ".report(), .to_json(), .plots(directory), .final, .fits"
 
     @property
     def base(self) -> TraceFit:

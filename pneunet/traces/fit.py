@@ -18,6 +18,7 @@ from typing import Callable
 import numpy as np
 
 from ..errors import DataError, ParameterError, PneunetError
+from ..reprs import Summarized, listed, number
 from ..truth.intervals import intervals
 from ..truth.lsq import least_squares_log
 from .align import Alignment
@@ -25,8 +26,8 @@ from .data import compared_samples, read_trace, signal_of_column
 from .model import DIFF_STEP, FIT_OPTIONS, TraceModel, TraceResidual, sample_at
 
 
-@dataclass
-class TraceFit:
+@dataclass(repr=False)
+class TraceFit(Summarized):
     """Result of :func:`fit_trace`.
 
     ``values``, ``ci`` ({name: (low, high)}), ``stderr_log`` (standard error of ln
@@ -57,6 +58,17 @@ class TraceFit:
     unit: str = "kPa"
     scales: dict = field(default_factory=dict)
     extras: dict = field(default_factory=dict)
+
+    def _summary(self):
+        estimates = (f"{k} {v:.4g} [{self.ci[k][0]:.3g}, {self.ci[k][1]:.3g}]"
+                     for k, v in self.values.items())
+        rows = [("estimates (95 % CI)", listed(estimates, 4)),
+                ("rms residual", number(self.error(), self.unit, 3)),
+                ("period error", number(self.period_error, "s", 3)),
+                ("converged", str(self.success)), ("evaluations", str(self.nfev)),
+                ("wall time", number(self.wall_time_s, "s", 3))]
+        title = " + ".join(e.name for e in self.effects) or "base model"
+        return title, rows, ".values, .ci, .residuals, .solution, .report()"
 
     def signals(self) -> list[str]:
         return [c for c in self.residuals.columns if c not in ("time_s", "phase", "fitted")]

@@ -29,3 +29,11 @@ def test_a_circuit_instead_of_a_builder_is_explained(call):
 def test_truth_table_arguments_are_checked(inputs, outputs, words):
     with pytest.raises(PneunetError, match=words):
         truth_table(NetlistBuilder(INVERTER), inputs, outputs)
+
+
+def test_truth_table_repr_names_inputs_outputs_and_margin():
+    tt = truth_table(NetlistBuilder(INVERTER), {"A": "Pin"}, ["out1"], t_settle=2.0,
+                     expected=lambda bits: (1 - bits[0],))
+    text = repr(tt)
+    assert text.startswith("<TruthTable: inputs A, outputs out1, rows 2")
+    assert "as expected 2 of 2" in text and "smallest margin" in text

@@ -77,3 +77,9 @@ def test_seat_height_study_recovers_trends_and_fig9(outdir):
     plots.fig9_seat_height(values, trends, outdir / "fig9_seat_height.png",
                            title="Parameters vs seat height (synthetic valves, bench data)")
     _png_ok(outdir / "fig9_seat_height.png")
+
+
+def test_valve_fit_repr_is_one_short_line_with_the_parameters(fitted):
+    text = repr(fitted("axi"))
+    assert len(text) < 400 and "\n" not in text and "array(" not in text, text
+    assert "Rf " in text and "kPa" in text and ".report()" in text

@@ -81,6 +81,10 @@ def test_clean_recording_is_adequate_with_intervals_covering_the_truth():
         lo, hi = j["fit"]["ci"][k]
         assert lo < truth < hi, (k, lo, hi)
         assert hi - lo < 0.05 * truth  # and they say something
+    for result, words in ((d, ("<TraceDiagnosis adequate:", "accepted nothing", "noise floor")),
+                          (d.final, ("<TraceFit base model:", "estimates (95 % CI)", "Rvent"))):
+        text = repr(result)  # one short line, not the residual table
+        assert len(text) < 400 and "\n" not in text and all(w in text for w in words), text
 
 
 #: the cases the default suite runs; the others are marked ``study`` (a minute each:
