@@ -90,9 +90,8 @@ class DataError(PneunetError):
 
 
 class SolverError(PneunetError):
-    """A simulation that could not be completed; carries the time reached."""
-
-    exit_code = 1
+    """A simulation that could not be completed (exit code 2, like any input the simulator
+    cannot do: the message names the time reached); carries the time reached."""
 
     def __init__(self, message: str, *, time: float | None = None, partial=None, **kwargs):
         self.time = time

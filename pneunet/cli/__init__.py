@@ -3,7 +3,8 @@
 Each sub-command module defines ``register(subparsers)``, which adds its parser
 and sets ``func(args) -> int`` as default.  Errors derived from
 :class:`~pneunet.errors.PneunetError` become a message and an exit code
-(0 ok, 1 simulation failed, 2 bad input); no traceback reaches the user.
+(0 ok, 1 every point of a sweep failed, 2 bad input or a simulation that cannot
+be completed); no traceback reaches the user.
 """
 from __future__ import annotations
 
@@ -21,7 +22,8 @@ def build_parser() -> argparse.ArgumentParser:
         prog="pneunet",
         description="Simulate pneumatic circuits of fluid-driven membrane valves, "
                     "identify valve parameters from measurements and diagnose the model.",
-        epilog="exit codes: 0 ok, 1 simulation failed, 2 bad input. "
+        epilog="exit codes: 0 ok, 2 bad input or a simulation that cannot be completed "
+               "(sweep: 1 if every point failed). "
                "Run 'pneunet COMMAND --help' for a command's options.")
     from .. import __version__
     parser.add_argument("--version", action="version", version=f"pneunet {__version__}")

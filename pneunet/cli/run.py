@@ -15,7 +15,8 @@ def register(subparsers) -> None:
                     "for each .step point if any, write one CSV per analysis (columns named "
                     "with units, e.g. p_tank_kPa) and print the .meas results. With .step, "
                     "also writes meas_summary.csv (one row per step). "
-                    "Exit codes: 0 ok, 1 simulation failed, 2 bad input.")
+                    "Exit codes: 0 ok, 2 bad input or a simulation that cannot be "
+                    "completed (a result with NaN or inf included).")
     p.add_argument("netlist", metavar="FILE.pn", help="netlist file")
     p.add_argument("-o", "--output", metavar="DIR", default=None,
                    help="output folder (default: ./<netlist name>_results)")
@@ -55,7 +56,8 @@ def _column_names(result) -> list[str]:
 def main(args) -> int:
     from ..errors import SolverError
     from ..netlist import parse_file
-    from ..netlist.runner import RunResult, evaluate_measures, measure_unit, run_analysis
+    from ..netlist.runner import (RunResult, check_finite, evaluate_measures, measure_unit,
+                                  run_analysis)
     from ..engine.solution import write_csv
 
     path = Path(args.netlist)
@@ -94,7 +96,7 @@ def main(args) -> int:
                     raise
                 # one failed step does not stop the sweep; the exit code says it failed
                 print(f"step {i}: {err.report()}", file=sys.stderr)
-                status = 1
+                status = err.exit_code
                 break
             res.results.append((analysis, result))
             counts[analysis.kind] = counts.get(analysis.kind, 0) + 1
@@ -106,6 +108,7 @@ def main(args) -> int:
                                                    for s in saves))
             else:
                 table = result.table()
+            check_finite(table, analysis.kind)
             csv = out_dir / f"{name}.csv"
             write_csv(csv, table)
             files.append(str(csv))

@@ -71,6 +71,30 @@ def run_analysis(deck: Deck, analysis, progress=False):
     raise TypeError(analysis)  # pragma: no cover
 
 
+def check_finite(table: dict, analysis: str) -> None:
+    """A result holding NaN or inf is a :class:`~pneunet.errors.SolverError` naming the
+    signal and the time (or sweep value) — never a result written with exit code 0."""
+    from ..errors import SolverError
+
+    if "signal" in table and "value" in table:  # an operating point: one row per signal
+        x_name, x = None, None
+        columns = {n: [v] for n, v in zip(table["signal"], table["value"])}
+    else:
+        x_name = next(iter(table))
+        x, columns = np.asarray(table[x_name], dtype=float), dict(list(table.items())[1:])
+    for name, values in columns.items():
+        values = np.asarray(values, dtype=float)
+        bad = ~np.isfinite(values)
+        if bad.any():
+            i = int(np.argmax(bad))
+            at = f" at {x_name} = {x[i]:g}" if x_name else ""
+            raise SolverError(f".{analysis} result: {name} is {values[i]}{at}",
+                              time=float(x[i]) if x_name == "time_s" else None,
+                              hint="the model left its valid range there (a pressure at or "
+                                   "below zero, a vanishing volume or resistance); check the "
+                                   "parameters of the elements at that node")
+
+
 def _dc(circuit, analysis: DC) -> DCResult:
     from .. import elements
     from ..waveforms import Constant
