@@ -66,6 +66,7 @@ def plot_regime_map(table, x: str, y: str, path=None, title=None):
     line is the boundary predicted by the stationary branches; crosses mark points where
     the two classifications disagree."""
     from ..plotting import pyplot, save
+    from .sweep_plot import parameter_label
 
     plt = pyplot()
 
@@ -97,14 +98,11 @@ def plot_regime_map(table, x: str, y: str, path=None, title=None):
     if bad.any():
         yy, xx = np.nonzero(bad)
         ax.plot(xs[xx], ys[yy], "x", color="crimson", ms=7, mew=2, label="classifications differ")
-    if failed.any() or bad.any():
-        ax.legend(fontsize=8, loc="upper left")
-    ax.set_xlabel(_label(x))
-    ax.set_ylabel(_label(y))
+    if failed.any() or bad.any():  # below the map, not over it
+        ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2,
+                  frameon=False)
+    ax.set_xlabel(parameter_label(x))
+    ax.set_ylabel(parameter_label(y))
     ax.set_title(title or "regime map: grey = equilibrium, colour = oscillation period\n"
                           "red line: boundary from the stationary branches", fontsize=10)
     return save(fig, path) if path is not None else fig
-
-
-def _label(name):
-    return {"Rout": "R_out (kPa·s/mg)", "Rvent": "R_vent (kPa·s/mg)", "V": "V (mL)"}.get(name, name)

@@ -47,7 +47,9 @@ class Axis:
     values: tuple
 
     def __post_init__(self):
-        object.__setattr__(self, "values", tuple(_plain(v) for v in self.values))
+        # 12 significant digits: 1.8, not linspace's 1.7999999999999998
+        object.__setattr__(self, "values", tuple(
+            float(f"{v:.12g}") if isinstance(v, float) else v for v in map(_plain, self.values)))
 
 
 def lin(name: str, start: float, stop: float, num: int) -> Axis:

@@ -175,18 +175,9 @@ def axes_are_oscillator(args) -> bool:
 
 def _plot(table, axes, path):
     from ..analysis.regime import plot_regime_map
-    from ..plotting import pyplot, save
+    from ..analysis.sweep_plot import plot_sweep
 
     names = [a.name for a in axes]
     if len(names) == 2 and "regime" in table.columns:
         return plot_regime_map(table, names[0], names[1], path)
-    plt = pyplot()
-    fig, ax = plt.subplots(figsize=(6, 4))
-    x = names[0] if names else table.columns[0]
-    numeric = [c for c in table.columns if c not in names and c not in ("elapsed_s", "cycles")
-               and table[c].dtype.kind == "f"][:4]
-    for c in numeric:
-        ax.plot(table[x], table[c], "o-", label=c)
-    ax.set_xlabel(x)
-    ax.legend(fontsize=8)
-    return save(fig, path)
+    return plot_sweep(table, names[0] if names else table.columns[0], path)
