@@ -27,3 +27,35 @@ def save(fig, path) -> Path:
     fig.savefig(path, dpi=120, bbox_inches="tight")
     pyplot().close(fig)
     return path
+
+
+def identical_groups(traces: dict, tol: float = 1e-2) -> list[list[str]]:
+    """Names of the traces grouped where they coincide on a plot (differences within
+    ``tol`` of the first one's range), in first-seen order."""
+    import numpy as np
+
+    groups: list[list[str]] = []
+    for name, y in traces.items():
+        for group in groups:
+            ref = traces[group[0]]
+            scale = tol * max(float(np.ptp(ref)) if ref.size else 0.0, 1e-9)
+            if ref.shape == y.shape and np.allclose(ref, y, rtol=0.0, atol=scale):
+                group.append(name)
+                break
+        else:
+            groups.append([name])
+    return groups
+
+
+def draw_traces(ax, t, traces: dict, ylabel: str) -> None:
+    """Plot ``traces`` ({label: values}) against ``t``: traces that coincide are one
+    line labelled ``a = b = c`` (and a note says so), the legend outside on the right."""
+    groups = identical_groups(traces)
+    for group in groups:
+        ax.plot(t, traces[group[0]], label=" = ".join(group))
+    ax.set_ylabel(ylabel)
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize="small", frameon=False)
+    if len(groups) < len(traces):
+        ax.text(0.0, 1.01, "traces that coincide (within 1 % of their range) are drawn "
+                "once, labelled a = b",
+                transform=ax.transAxes, fontsize="x-small", color="0.35", va="bottom")

@@ -180,27 +180,24 @@ class Solution(Summarized):
         write_csv(path, self.table())
 
     def plot(self, path=None, signals=None):
-        """Plot pressures (top) and flows (bottom); save a PNG when ``path`` is given."""
-        from ..plotting import pyplot, save
+        """Pressures (top) and flows (bottom) against time; traces with equal values are
+        drawn once (labelled ``a = b``), legends outside the axes.  Saves a PNG when
+        ``path`` is given, else returns the figure."""
+        from ..plotting import draw_traces, pyplot, save
 
         names = list(signals) if signals else list(self.signals)
-        pressures = [n for n in names if self.units.get(n) == "kPa" and n.startswith("p_")]
-        flows = [n for n in names if self.units.get(n) == "mg/s"]
+        pressures = {n[2:]: self[n] for n in names
+                     if self.units.get(n) == "kPa" and n.startswith("p_")}
+        flows = {n[5:]: self[n] for n in names if self.units.get(n) == "mg/s"}
         plt = pyplot()
-        fig, axes = plt.subplots(2 if flows else 1, 1, sharex=True, figsize=(8, 6 if flows else 3.5),
-                                 squeeze=False)
-        for n in pressures:
-            axes[0, 0].plot(self.t, self[n], label=n[2:])
-        axes[0, 0].set_ylabel("pressure (kPa abs)")
-        axes[0, 0].legend(loc="best", fontsize="small")
+        fig, axes = plt.subplots(2 if flows else 1, 1, sharex=True, squeeze=False,
+                                 figsize=(8, 6 if flows else 3.5))
+        draw_traces(axes[0, 0], self.t, pressures, "pressure (kPa abs)")
         if flows:
-            for n in flows:
-                axes[1, 0].plot(self.t, self[n], label=n[5:])
-            axes[1, 0].set_ylabel("mass flow (mg/s)")
-            axes[1, 0].legend(loc="best", fontsize="small")
+            draw_traces(axes[1, 0], self.t, flows, "mass flow (mg/s)")
         axes[-1, 0].set_xlabel("time (s)")
         if self.title:
-            axes[0, 0].set_title(self.title)
+            fig.suptitle(self.title)
         return save(fig, path) if path is not None else fig
 
 
