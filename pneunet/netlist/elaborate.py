@@ -175,6 +175,12 @@ class _Builder:
                     self._model(st, self.scope)
         self.circuit = Circuit(self.source.title, options=self.options)
         self._body(top, self.scope, "", {}, [])
+        if not self.circuit.elements:
+            last = self.source.top[-1].span if self.source.top else \
+                SourceSpan(self.source.file, 1, 1)
+            raise _err(f"{self.source.file} has no elements" + (" (the file is empty)" if not
+                       self.source.top else ""), last,
+                       "write one element per line, e.g. 'P1 supply 400kPa' (docs/netlist.md)")
         deck = Deck(self.circuit, title=self.source.title, file=self.source.file,
                     params=dict(self.scope.values), overrides=dict(self.overrides),
                     source=self.source)

@@ -1,0 +1,87 @@
+"""Hostile sizes: empty files, megabyte lines, deep nesting and long comment blocks end in
+one located error or parse in time linear in the file size; every limit is named and can be
+changed."""
+import time
+
+import pytest
+
+from pneunet.cli import main
+from pneunet.errors import NetlistError
+from pneunet.netlist import parse_file, parse_netlist
+
+BASE = "P1 a 200kPa\nR1 a atm 1\nV1 a 10mL\n"
+
+
+@pytest.mark.parametrize("text, line", [("", 1), ("\n\n   \n", 1), ("* only a title\n* and a comment\n", 1),
+                                        (".param x=1\n.tran 1s\n", 2)])
+def test_a_netlist_without_elements_names_its_file(tmp_path, text, line, capsys):
+    path = tmp_path / "empty.pn"
+    path.write_text(text)
+    with pytest.raises(NetlistError) as info:
+        parse_file(path)
+    assert info.value.message.startswith(f"{path} has no elements")
+    assert info.value.span.line == line
+    assert main(["check", str(path)]) == 2
+    assert f"{path}:{line}:1: error: {path} has no elements" in capsys.readouterr().err
+
+
+def test_a_megabyte_line_is_refused_at_the_limit_with_a_short_message(tmp_path, capsys):
+    path = tmp_path / "long.pn"
+    path.write_text(BASE + "R2 a atm 1 " + "x" * 2_000_000 + "\n")
+    start = time.perf_counter()
+    assert main(["check", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert time.perf_counter() - start < 2
+    assert f"{path}:4:100001: error: line of 2000011 characters is too long (limit " \
+           "max_line_length = 100000)" in err
+    assert len(err) < 800 and "--limit max_line_length=N" in err
+    path.write_text(BASE + "R2 a atm 1 ; " + "x" * 200 + "\n")
+    assert main(["check", str(path), "--limit", "max_line_length=100"]) == 2
+    assert ":4:101: error: line of 213 characters" in capsys.readouterr().err
+
+
+def test_ten_thousand_comment_lines_parse_in_linear_time():
+    """A run of comment lines was quadratic (10,000 lines: over 2 minutes)."""
+    text = BASE + "* a comment line of some length\n" * 10_000 + ".tran 10ms 0.1s\n"
+    start = time.perf_counter()
+    deck = parse_netlist(text)
+    assert time.perf_counter() - start < 1.5
+    assert deck.analyses[0].span.line == 10_004
+
+
+def test_continuation_across_comment_lines_keeps_its_line_numbers():
+    deck = parse_netlist("P1 a 200kPa\nR1 a atm\n* note\n\n+ 2\nV1 a 10mL\n.tran 1s\n")
+    assert deck.circuit.elements["R1"].params["R"] == 2.0
+    assert deck.analyses[0].span.line == 7
+
+
+@pytest.mark.parametrize("expr", ["1?" * 5_000 + "1" + ":1" * 5_000, "-" * 20_000 + "1",
+                                  "1" + "^1" * 8_000, "(" * 8_000 + "1" + ")" * 8_000],
+                         ids=["ternary", "unary", "power", "parentheses"])
+def test_deep_expressions_end_in_bounded_time(expr):
+    """As deep as a line allows (a 200,000-deep ternary is a line over the limit)."""
+    start = time.perf_counter()
+    try:
+        parse_netlist(BASE + f".param x={{{expr}}}\n")
+    except NetlistError as err:
+        assert err.span.line == 4 and "max_expression_depth = 200" in err.message
+    assert time.perf_counter() - start < 10
+
+
+def test_limits_are_changed_through_the_api_and_the_cli(tmp_path, capsys):
+    text = BASE + "R[0:9] a atm 1\n"
+    assert len(parse_netlist(text).circuit.elements) == 13
+    with pytest.raises(NetlistError, match=r"makes 10 copies \(limit max_array_size = 5\)"):
+        parse_netlist(text, limits={"max_array_size": 5})
+    with pytest.raises(NetlistError, match=r"more than 4 elements \(limit max_elements = 4\)"):
+        parse_netlist(text, limits={"max_elements": 4})
+    deep = BASE + ".param x={" + "-" * 300 + "1}\n"
+    assert parse_netlist(deep, limits={"max_expression_depth": 400}).params["x"] == 1
+    path = tmp_path / "a.pn"
+    path.write_text(text)
+    assert main(["check", str(path), "--limit", "max_array_size=5"]) == 2
+    assert "makes 10 copies (limit max_array_size = 5)" in capsys.readouterr().err
+    assert main(["check", str(path), "--limit", "max_aray_size=5"]) == 2
+    assert "unknown limit 'max_aray_size'" in capsys.readouterr().err
+    assert main(["check", str(path), "--limit", "max_array_size=-1"]) == 2
+    assert "must be a whole number >= 1" in capsys.readouterr().err
