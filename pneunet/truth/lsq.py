@@ -31,55 +31,75 @@ def evaluate_many(fun, xs, pool=None) -> list:
     return list(pool.map(fun, xs))
 
 
-#: fresh starts of LM from the bound after it stepped outside the box
+#: fresh starts of LM after it stepped past a bound (each with that parameter held there)
 RESTARTS = 2
 
 
 def least_squares_log(fun, x0, lb, ub, *, max_nfev: int = 40, diff_step: float = 1e-3,
                       pool=None, xtol: float = 1e-5, ftol: float = 1e-6) -> LsqResult:
-    """Levenberg–Marquardt on ``fun(x)`` (x: ln-parameters, kept in [lb, ub] by clipping)
-    with forward differences of step ``diff_step`` (backwards at an upper bound).
+    """Levenberg–Marquardt on ``fun(x)`` (x: ln-parameters in [lb, ub]) with forward
+    differences of step ``diff_step`` (backwards at an upper bound).
 
-    ``max_nfev`` caps the simulations, Jacobian columns included (over the
-    :data:`RESTARTS` fresh starts from a bound that LM stepped past)."""
+    LM knows no bounds: a step past one is clipped, and LM starts again (at most
+    :data:`RESTARTS` times) with that parameter held at its bound and the others free.
+    ``max_nfev`` caps the simulations, Jacobian columns included; no point is simulated
+    twice.  The Jacobian returned has a column for every parameter."""
     from scipy import optimize
 
     lb, ub = np.asarray(lb, float), np.asarray(ub, float)
     count = {"n": 0}
-    cache = {}
+    # by point: LM comes back to its best point after a rejected step, scipy asks for f
+    # and J at the solution once more, a restart reuses the free parameters' columns
+    residuals, columns = {}, {}
 
     def f(x):
-        xc = np.clip(x, lb, ub)
-        key = xc.tobytes()
-        if key not in cache:
+        key = x.tobytes()
+        if key not in residuals:
             count["n"] += 1
-            cache.clear()
-            cache[key] = fun(xc)
-        return cache[key]
+            residuals[key] = fun(x)
+        return residuals[key]
 
-    def jac(x):
-        xc = np.clip(x, lb, ub)
+    def jacobian(x, which):
         f0 = f(x)
-        steps = np.where(xc + diff_step <= ub, diff_step, -diff_step)
-        pts = []
-        for i in range(len(xc)):
-            xi = xc.copy()
+        steps = np.where(x + diff_step <= ub, diff_step, -diff_step)
+        todo = [i for i in which if (x.tobytes(), i) not in columns]
+        points = []
+        for i in todo:
+            xi = x.copy()
             xi[i] += steps[i]
-            pts.append(xi)
-        cols = evaluate_many(fun, pts, pool)
-        count["n"] += len(pts)
-        return np.column_stack([(c - f0) / h for c, h in zip(cols, steps)])
+            points.append(xi)
+        for i, col in zip(todo, evaluate_many(fun, points, pool)):
+            columns[x.tobytes(), i] = (col - f0) / steps[i]
+        count["n"] += len(todo)
+        return np.column_stack([columns[x.tobytes(), i] for i in which])
 
-    p = len(x0)
-    x = np.clip(x0, lb, ub)
+    x = np.clip(np.asarray(x0, float), lb, ub)
+    free = np.ones(len(x), bool)
     for _ in range(1 + RESTARTS):
+        idx = np.flatnonzero(free)
+
+        def at(z, base=x.copy(), idx=idx):
+            full = base.copy()
+            full[idx] = np.clip(z, lb[idx], ub[idx])
+            return full
+
         left = max_nfev - count["n"]
-        res = optimize.least_squares(f, x, jac=jac, method="lm",
-                                     max_nfev=max(2, left // (p + 1)), xtol=xtol, ftol=ftol)
-        x = np.clip(res.x, lb, ub)
-        # LM walked past a bound, where the clipped residual is flat and its damping
-        # grows without progress: start again from the bound with fresh damping
-        if np.array_equal(x, res.x) or max_nfev - count["n"] < 2 * (p + 1):
+        res = optimize.least_squares(lambda z: f(at(z)), x[idx],
+                                     jac=lambda z, idx=idx: jacobian(at(z), idx), method="lm",
+                                     max_nfev=max(2, left // (idx.size + 1)), xtol=xtol,
+                                     ftol=ftol)
+        x = at(res.x)
+        # LM walked past a bound, where the clipped residual is flat: hold it there;
+        # release a held parameter whose gradient points back into the box
+        hold = idx[x[idx] != res.x]
+        if max_nfev - count["n"] < 2 * (len(x) + 1):
             break
-    return LsqResult(x, np.asarray(res.fun), np.asarray(res.jac), count["n"], bool(res.success),
-                     str(res.message))
+        g = jacobian(x, range(len(x))).T @ f(x)
+        release = np.flatnonzero(~free & (((x >= ub) & (g > 0)) | ((x <= lb) & (g < 0))))
+        if not hold.size and not release.size:
+            break
+        free[hold], free[release] = False, True
+        if not free.any():
+            break
+    return LsqResult(x, np.asarray(f(x)), jacobian(x, range(len(x))), count["n"],
+                     bool(res.success), str(res.message))
