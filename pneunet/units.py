@@ -116,8 +116,8 @@ def _convert(value, unit, target, slot, gas, name):
     ureg = registry()
     try:
         q = ureg.Quantity(value, unit)
-    except (pint.errors.UndefinedUnitError, AttributeError, TypeError, ValueError,
-            AssertionError) as exc:
+    except Exception as exc:  # noqa: BLE001 - pint's parser raises many kinds on bad text
+        # (UndefinedUnitError, ValueError, tokenize.TokenError for an unclosed '(' ...)
         raise ParameterError(f"{name}: unknown unit {unit!r}",
                              hint=f"{slot} is given in {target or 'no unit'}, e.g. "
                                   f"{example(slot)}") from exc
