@@ -15,7 +15,7 @@ SEEDS = TARGET.seeds()
 fuzz.watch_opens()
 
 
-@settings(max_examples=250, derandomize=True, deadline=None, database=None,
+@settings(max_examples=200, derandomize=True, deadline=None, database=None,
           suppress_health_check=list(HealthCheck))
 @given(index=st.integers(0, len(SEEDS) - 1), seed=st.integers(0, 2**32 - 1),
        rounds=st.integers(1, 3))
