@@ -47,7 +47,8 @@ def _limits(limits):
 
 
 def _build(src, path, overrides, limits, include_path) -> Deck:
-    from .elaborate import elaborate, load
+    from .elaborate import elaborate
+    from .structure import load
     from .includes import IncludePolicy
 
     policy = IncludePolicy.for_netlist(path, include_path)

@@ -1,23 +1,27 @@
-"""Statements -> Deck: includes, subcircuits, arrays, parameters, models, elements, analyses.
+"""Statements -> Deck: parameters, options, elements, subcircuit instances and ``.ic``.
 
-All meaning lives here; every error is a :class:`NetlistError` with the span of the
-offending item (line and column), so the CLI can draw a caret under it.
+The parts of the meaning that have their own statements live beside it: ``.model`` cards
+(:mod:`.models`), analyses (:mod:`.analyses`), ``.meas`` (:mod:`.measures`), the file
+structure (:mod:`.structure`: includes, ``.subckt``).  Every error is a
+:class:`NetlistError` with the span of the offending item (line and column), so the CLI can
+draw a caret under it.
 """
 from __future__ import annotations
 
-import difflib
 import math
 import re
-from dataclasses import dataclass, field
-from pathlib import Path
 
 from ..errors import NetlistError, PneunetError, SourceSpan
-from .deck import DC, Deck, Measure, Op, Signal, Step, Tran
-from .expr import Scope, evaluate
+from .analyses import AnalysisStatements
 from .arrays import split_range
-from .includes import KEYWORDS as INCLUDE_KEYWORDS, IncludePolicy, expand
-from .limits import DEFAULT as DEFAULT_LIMITS, Limits
-from .syntax import Call, Group, Pair, SourceText, Statement, Str, Word
+from .deck import Deck, Op
+from .expr import Scope, evaluate
+from .includes import KEYWORDS as INCLUDE_KEYWORDS
+from .located import did_you_mean as _close, error_at as _err
+from .measures import MeasureStatements
+from .models import ModelCards
+from .structure import Source
+from .syntax import Call, Pair, Str, Word
 from .values import (SCALE, check_number, convert, dimension_of, number_in_expression,
                      set_expression_ambient, split)
 
@@ -36,104 +40,7 @@ OPTIONS = {
     "max_step": ("max_step", "time"), "fold_threshold": ("fold_threshold", "dimensionless"),
 }
 
-#: valve .model card parameter -> slot
-VALVE_CARD = {"Rf": "resistance", "pclose": "pressure_difference", "ptrans": "pressure_difference",
-              "e": "dimensionless", "ain": "dimensionless", "aout": "dimensionless"}
-
 _BRACES = re.compile(r"\{[^{}]*\}")
-
-
-def _err(msg, item_or_span, hint=None):
-    """A NetlistError at an item; a message quoting a long word is cut (the caret shows it)."""
-    span = item_or_span if isinstance(item_or_span, SourceSpan) else item_or_span.span
-    if len(msg) > 300:
-        msg = msg[:299] + "…"
-    return NetlistError(msg, span=span, hint=hint)
-
-
-def _close(word, choices):
-    m = difflib.get_close_matches(word, list(choices), n=1, cutoff=0.6)
-    return f"did you mean {m[0]!r}?" if m else None
-
-
-# -- source structure ------------------------------------------------------------------
-@dataclass
-class Subckt:
-    name: str
-    ports: list
-    defaults: list  # Pair items
-    body: list
-    span: SourceSpan
-
-
-@dataclass
-class Source:
-    """A netlist file with includes expanded and subcircuits separated."""
-
-    file: str
-    title: str
-    top: list
-    subckts: dict = field(default_factory=dict)
-    limits: Limits = DEFAULT_LIMITS
-
-
-def load(src: SourceText, policy: IncludePolicy | None = None,
-         limits: Limits = DEFAULT_LIMITS) -> Source:
-    """Expand ``.include`` (see :mod:`.includes`) and collect ``.subckt`` blocks."""
-    if policy is None:
-        policy = IncludePolicy.for_netlist(Path(src.name) if src.name != "<netlist>" else None)
-    statements = list(expand(src, policy, limits))
-    title = src.title
-    top, subckts, stack = [], {}, []
-    for st in statements:
-        kw = st.keyword if st.is_directive else ""
-        if kw == ".end":
-            break
-        if kw == ".title":
-            title = " ".join(str(i) for i in st.items[1:])
-            continue
-        if kw == ".subckt":
-            if len(st.items) < 2 or not isinstance(st.items[1], Word):
-                raise _err(".subckt needs a name", st.span, "e.g. .subckt CELL in out k=1")
-            ports, defaults = [], []
-            for it in st.items[2:]:
-                if isinstance(it, Pair):
-                    defaults.append(it)
-                elif isinstance(it, Word) and it.text.lower() == "params:":
-                    continue
-                elif isinstance(it, Word):
-                    if defaults:
-                        raise _err(f"port {it.text!r} after parameters", it,
-                                   "list the ports first, then key=value defaults")
-                    ports.append(it.text)
-                else:
-                    raise _err(f"unexpected {it} in .subckt line", it)
-            stack.append(Subckt(st.items[1].text, ports, defaults, [], st.span))
-            continue
-        if kw == ".ends":
-            if not stack:
-                raise _err(".ends without .subckt", st.span)
-            sub = stack.pop()
-            if len(st.items) > 1 and isinstance(st.items[1], Word) and \
-                    st.items[1].text.lower() != sub.name.lower():
-                raise _err(f".ends {st.items[1].text} closes .subckt {sub.name}", st.items[1])
-            key = sub.name.lower()
-            if key in subckts:
-                raise _err(f"subcircuit {sub.name!r} defined twice", sub.span,
-                           f"first defined at {subckts[key].span}")
-            subckts[key] = sub
-            continue
-        if stack:
-            if kw in (".tran", ".op", ".dc", ".step", ".meas", ".measure", ".options", ".option",
-                      ".save", ".print"):
-                raise _err(f"{st.head} is not allowed inside .subckt {stack[-1].name}", st.span,
-                           "put analyses and options at the top level")
-            stack[-1].body.append(st)
-        else:
-            top.append(st)
-    if stack:
-        raise _err(f".subckt {stack[-1].name} has no .ends", stack[-1].span)
-    return Source(src.name, title, top, subckts, limits)
 
 
 # -- elaboration -------------------------------------------------------------------------
@@ -141,7 +48,7 @@ def elaborate(source: Source, overrides: dict | None = None) -> Deck:
     return _Builder(source, overrides or {}).build()
 
 
-class _Builder:
+class _Builder(ModelCards, AnalysisStatements, MeasureStatements):
     def __init__(self, source: Source, overrides: dict):
         self.source = source
         self.limits = source.limits
@@ -320,85 +227,6 @@ class _Builder:
         return check_number(value, text, word.span, name)
 
     # ---- models
-    def _model(self, st, scope):
-        if len(st.items) != 3 or not isinstance(st.items[1], Word):
-            raise _err(".model needs a name and a card", st.span,
-                       "e.g. .model myvalve VALVE(Rf=0.5 pclose=90kPa ptrans=150kPa e=2 ain=0.3 aout=0.7)")
-        name, card = st.items[1].text, st.items[2]
-        key = name.lower()
-        if key in self.models:
-            raise _err(f"model {name!r} defined twice", st.items[1],
-                       f"first defined at {self.model_spans[key]}")
-        if isinstance(card, Word):  # .model NAME axi  (an alias of a known valve)
-            self.models[key] = self._lookup_model(card)
-        elif isinstance(card, Call) and card.name.upper() == "VALVE":
-            self.models[key] = self._valve_card(card, scope, name)
-        elif isinstance(card, Call):
-            raise _err(f"unknown model type {card.name!r}", card, "known: VALVE")
-        else:
-            raise _err(f"unexpected {card} in .model", card)
-        self.model_spans[key] = st.span
-
-    def _lookup_model(self, word: Word):
-        from ..valve_params import PAPER_VALVES
-
-        key = word.text.lower()
-        if key in self.models:
-            return self.models[key]
-        if key in PAPER_VALVES:
-            return PAPER_VALVES[key]
-        known = sorted(set(self.models) | set(PAPER_VALVES))
-        raise _err(f"undefined valve model {word.text!r}", word,
-                   _close(key, known) or "known: " + ", ".join(known))
-
-    def _valve_card(self, card: Call, scope, name):
-        from ..valve_params import ValveParams
-
-        values, extra, base = {}, {}, None
-        canon = {k.lower(): k for k in VALVE_CARD}
-        for arg in card.args:
-            if isinstance(arg, Word) and base is None and not values:
-                base = self._lookup_model(arg)
-                continue
-            if not isinstance(arg, Pair) or not isinstance(arg.key, Word):
-                raise _err(f"VALVE(...) expects name=value, got {arg}", arg,
-                           "e.g. VALVE(Rf=0.566 pclose=96.42kPa ...)")
-            k = arg.key.text
-            if k.lower() in canon:
-                k = canon[k.lower()]
-                values[k] = self._number(arg.value, VALVE_CARD[k], k, scope)
-            elif "_" in k:
-                extra[k] = self._scalar(arg.value, scope) if isinstance(arg.value, Word) else \
-                    self._fail_value(arg)
-            else:
-                raise _err(f"unknown valve parameter {k!r}", arg.key,
-                           _close(k, VALVE_CARD) or "known: " + ", ".join(VALVE_CARD) +
-                           " and <effect>_<param> for effects")
-        if base is not None:
-            if not isinstance(base, ValveParams):
-                raise _err("only a six-parameter valve can be the base of a VALVE card", card)
-            values = {**base.as_dict(), **values}
-        missing = [k for k in VALVE_CARD if k not in values]
-        if missing:
-            raise _err(f"valve model {name} misses {', '.join(missing)}", card,
-                       "give all six (Rf pclose ptrans e ain aout) or start from a known valve: "
-                       "VALVE(axi pclose=90kPa)")
-        try:
-            params = ValveParams(**values)
-        except PneunetError as err:
-            raise _err(f"valve model {name}: {err.message}", card, err.hint) from None
-        if not extra:
-            return params
-        try:
-            from ..effects import ValveModel
-        except ImportError:
-            raise _err(f"valve model {name}: effect parameters ({', '.join(extra)}) need "
-                       "pneunet.effects.ValveModel, which this installation lacks", card) from None
-        try:
-            return ValveModel.from_card_params({**values, **extra})
-        except PneunetError as err:
-            raise _err(f"valve model {name}: {err.message}", card, err.hint) from None
-
     def _fail_value(self, arg):
         raise _err(f"{arg.key} expects a number", arg.value)
 
@@ -712,243 +540,6 @@ class _Builder:
             self.circuit.set_initial(node, value)
 
     # ---- analyses
-    def _positional_numbers(self, st, slot, label):
-        out = []
-        for it in st.items[1:]:
-            if not isinstance(it, Word):
-                raise _err(f"{st.head} expects numbers, got {it}", it)
-            out.append(self._number(it, slot, label, self.scope))
-        return out
-
-    def _tran(self, st):
-        values = self._positional_numbers(st, "time", ".tran time")
-        if not values or len(values) > 3:
-            raise _err(f".tran takes [tstep] tstop [tstart], got {len(values)} value(s)", st.span,
-                       "e.g. .tran 10ms 5s")
-        step, stop, start = (None, values[0], 0.0) if len(values) == 1 else \
-            (values[0], values[1], values[2] if len(values) == 3 else 0.0)
-        if stop <= 0:
-            raise _err(f"t_stop must be > 0 s, got {stop:g}", st.items[2 if len(values) > 1 else 1])
-        if step is not None and step <= 0:
-            raise _err(f"t_step must be > 0 s, got {step:g}", st.items[1])
-        if start < 0 or start >= stop:
-            raise _err("t_start must lie in [0, t_stop)", st.items[3])
-        if step is not None and (stop - start) / step > self.limits.max_output_points:
-            raise _err(f".tran {step:g} {stop:g} asks for {(stop - start) / step:.3g} output "
-                       f"points ({self.limits.exceeded('max_output_points')})", st.items[1],
-                       "a larger output step (the solver's own steps are not limited by it); "
-                       + self.limits.hint("max_output_points"))
-        return Tran(stop, step, start, st.span)
-
-    def _dc(self, st):
-        items = st.items[1:]
-        if not items or not isinstance(items[0], Word):
-            raise _err(".dc needs a source name", st.span, "e.g. .dc PH 96kPa 596kPa 25kPa")
-        name = items[0].text
-        spec = self.circuit.elements.get(name)
-        if spec is None or spec.kind not in ("pressure_source", "flow_source"):
-            sources = [n for n, e in self.circuit.elements.items()
-                       if e.kind in ("pressure_source", "flow_source")]
-            raise _err(f".dc sweeps a source; {name!r} is " +
-                       ("not a source" if spec else "not defined"), items[0],
-                       _close(name, sources) or ("sources: " + ", ".join(sources)))
-        from .. import elements
-
-        slot = elements.family(spec.kind).params["value"].slot
-        values = self._sweep_values(st, items[1:], lambda w: self._number(w, slot, name, self.scope))
-        return DC(name, values, st.span)
-
-    def _sweep_values(self, st, items, conv):
-        if items and isinstance(items[0], Word) and items[0].text.lower() == "list":
-            if len(items) < 2:
-                raise _err("list needs at least one value", items[0])
-            return [conv(w) for w in items[1:]]
-        if items and isinstance(items[0], Word) and items[0].text.lower() == "lin":
-            items = items[1:]
-        if len(items) != 3:
-            raise _err(f"{st.head} needs start stop step (or list v1 v2 ...), got {len(items)} "
-                       "value(s)", items[-1] if items else st.span)
-        start, stop, step = (conv(w) for w in items)
-        if step == 0 or (stop - start) / step < 0:
-            raise _err(f"step {step:g} does not go from {start:g} to {stop:g}", items[2])
-        n = (stop - start) / step + 1
-        if n > self.limits.max_sweep_points:
-            raise _err(f"{n:.3g} sweep points ({self.limits.exceeded('max_sweep_points')})",
-                       items[2], self.limits.hint("max_sweep_points"))
-        n = int(math.floor(n - 1 + 1e-9)) + 1
-        return [start + i * step for i in range(n)]
-
-    def _step(self, st):
-        items = list(st.items[1:])
-        if items and isinstance(items[0], Word) and items[0].text.lower() in ("lin", "list") \
-                and len(items) > 2 and isinstance(items[1], Word) and items[1].text.lower() == "param":
-            items = [items[1], items[2], items[0]] + items[3:]
-        if items and isinstance(items[0], Word) and items[0].text.lower() == "param":
-            items = items[1:]
-        if not items or not isinstance(items[0], Word) or \
-                not re.fullmatch(r"[A-Za-z_][A-Za-z_0-9]*", items[0].text):
-            raise _err(".step needs a parameter name", items[0] if items else st.span,
-                       "e.g. .step param Rout list 0.566 1.132")
-        name = items[0].text
-        declared = [it.key.text for s in self.source.top if s.keyword == ".param"
-                    for it in s.items[1:] if isinstance(it, Pair) and isinstance(it.key, Word)]
-        if name not in declared:
-            raise _err(f".step of {name!r}, which no .param line defines", items[0],
-                       _close(name, declared) or "define it first: .param NAME=value")
-        values = self._sweep_values(st, items[1:], lambda w: self._scalar(w, self.scope))
-        return Step(name, values, st.span)
-
-    def _signal(self, item, label="signal"):
-        if isinstance(item, Call) and len(item.args) == 1 and isinstance(item.args[0], Word):
-            # p and mdot by any of their names; an element's own signal (T, opening …)
-            # as its family spells it
-            q = {"p": "p", "v": "p", "pressure": "p", "mdot": "mdot", "m": "mdot", "i": "mdot",
-                 "flow": "mdot"}.get(item.name.lower(), item.name)
-            target = item.args[0].text
-            if q == "p":
-                if target not in self.circuit.nodes:
-                    raise _err(f"unknown node {target!r}", item.args[0],
-                               _close(target, self.circuit.nodes))
-            elif target not in self.circuit.elements:
-                raise _err(f"unknown element {target!r}", item.args[0],
-                           _close(target, self.circuit.elements))
-            return Signal(q, target)
-        raise _err(f"expected a {label} like p(node) or mdot(element), got {item}", item)
-
-    def _saves(self, st):
-        items = st.items[1:]
-        if items and isinstance(items[0], Word) and items[0].text.lower() in ("tran", "op", "dc"):
-            items = items[1:]
-        if len(items) == 1 and isinstance(items[0], Word) and items[0].text.lower() == "all":
-            return []
-        if not items:
-            raise _err(f"{st.head} needs signals", st.span, "e.g. .save p(tank) mdot(X1)")
-        return [self._signal(it) for it in items]
-
-    def _meas(self, st) -> Measure:
-        items = list(st.items[1:])
-        analysis = "tran"
-        if items and isinstance(items[0], Word) and items[0].text.lower() in ("tran", "op", "dc"):
-            analysis = items.pop(0).text.lower()
-        if len(items) < 2 or not isinstance(items[0], Word):
-            raise _err(".meas needs a name and a measurement", st.span,
-                       "e.g. .meas tran period PERIOD p(tank)")
-        name = items[0].text
-        if not re.fullmatch(r"[A-Za-z_][A-Za-z_0-9]*", name):
-            raise _err(f"bad measurement name {name!r}", items[0])
-        kind_item = items[1]
-        if not isinstance(kind_item, Word):
-            raise _err(f"expected a measurement kind, got {kind_item}", kind_item)
-        kind = kind_item.text.lower()
-        rest = items[2:]
-        m = Measure(name, kind, analysis, span=st.span,
-                    text=" ".join(str(i) for i in st.items))
-        kinds = ("find", "min", "max", "avg", "pp", "rms", "integ", "when", "trig", "period",
-                 "freq", "risetime", "falltime", "filltime", "param")
-        if kind not in kinds:
-            raise _err(f"unknown measurement {kind_item.text!r}", kind_item,
-                       _close(kind, kinds) or "known: " + ", ".join(k.upper() for k in kinds))
-        time_slot = "time"
-        if analysis == "dc":
-            time_slot = None  # sweep values (in the source's unit)
-        if kind == "param":
-            if len(rest) != 1 or not isinstance(rest[0], Word):
-                raise _err("PARAM needs one {expression} of other measurements", kind_item)
-            m.args["expr"] = rest[0]
-            return m
-        if kind == "when":
-            if not rest or not isinstance(rest[0], Pair):
-                raise _err("WHEN needs signal=value", rest[0] if rest else kind_item,
-                           "e.g. .meas t1 WHEN p(tank)=296kPa RISE=1")
-            m.signal = self._signal(rest[0].key)
-            m.args["level"] = self._level(m.signal, rest[0].value)
-            self._meas_keys(m, rest[1:], ("rise", "fall", "cross", "from", "to", "td"), time_slot)
-            return m
-        if kind == "trig":
-            targ = next((i for i, it in enumerate(rest) if isinstance(it, Word)
-                         and it.text.lower() == "targ"), None)
-            if targ is None or not rest:
-                raise _err("TRIG needs ... TARG ...", kind_item,
-                           "e.g. .meas dt TRIG p(a) VAL=150kPa RISE=1 TARG p(b) VAL=150kPa RISE=1")
-            m.kind = "trig_targ"
-            for part, label in ((rest[:targ], "trig"), (rest[targ + 1:], "targ")):
-                if not part:
-                    raise _err(f"{label.upper()} needs a signal", kind_item)
-                sig = self._signal(part[0])
-                sub = Measure(label, label, analysis)
-                sub.signal = sig
-                self._meas_keys(sub, part[1:], ("val", "rise", "fall", "cross", "td"), time_slot)
-                if "val" not in sub.args:
-                    raise _err(f"{label.upper()} needs VAL=", part[0])
-                m.args[label] = sub
-            return m
-        if not rest:
-            raise _err(f"{kind.upper()} needs a signal", kind_item)
-        m.signal = self._signal(rest[0])
-        tail = rest[1:]
-        if kind == "find":
-            if tail and isinstance(tail[0], Word) and tail[0].text.lower() == "when":
-                if len(tail) < 2 or not isinstance(tail[1], Pair):
-                    raise _err("FIND ... WHEN needs signal=value", tail[0])
-                m.kind = "find_when"
-                sig = self._signal(tail[1].key)
-                m.args["when"] = sig
-                m.args["level"] = self._level(sig, tail[1].value)
-                self._meas_keys(m, tail[2:], ("rise", "fall", "cross", "from", "to", "td"), time_slot)
-                return m
-            self._meas_keys(m, tail, ("at",), time_slot)
-            if "at" not in m.args and analysis != "op":
-                raise _err("FIND needs AT=time or WHEN signal=value", kind_item,
-                           "e.g. .meas p5 FIND p(tank) AT=5s")
-            return m
-        if kind in ("risetime", "falltime", "filltime"):
-            self._meas_keys(m, tail, ("low", "high", "from", "to"), time_slot, signal=m.signal)
-            if "low" not in m.args or "high" not in m.args:
-                raise _err(f"{kind.upper()} needs LOW= and HIGH=", kind_item,
-                           "e.g. .meas fill FILLTIME p(act) LOW=96kPa HIGH=296kPa")
-            return m
-        if kind in ("period", "freq"):
-            self._meas_keys(m, tail, ("level", "from", "to", "cycles"), time_slot, signal=m.signal)
-            return m
-        self._meas_keys(m, tail, ("from", "to"), time_slot)
-        return m
-
-    def _level(self, sig, word):
-        slot = {"p": "pressure", "mdot": "flow"}.get(sig.quantity, "dimensionless")
-        return self._number(word, slot, f"level of {sig}", self.scope)
-
-    def _meas_keys(self, m, items, allowed, time_slot, signal=None):
-        for it in items:
-            if not isinstance(it, Pair) or not isinstance(it.key, Word):
-                raise _err(f"unexpected {it} in .meas", it,
-                           "options are key=value: " + ", ".join(a.upper() + "=" for a in allowed))
-            k = it.key.text.lower()
-            if k not in allowed:
-                raise _err(f"unknown .meas option {it.key.text!r}", it.key,
-                           _close(k, allowed) or "known here: " + ", ".join(a.upper() for a in allowed))
-            if k in ("rise", "fall", "cross", "cycles"):
-                if isinstance(it.value, Word) and it.value.text.lower() == "last":
-                    m.args["edge"], m.args["n"] = (k if k != "cycles" else "rise"), -1
-                    continue
-                v = self._number(it.value, "dimensionless", k.upper(), self.scope)
-                if v != int(v) or v < 1:
-                    raise _err(f"{k.upper()} must be a whole number >= 1 (or LAST)", it.value)
-                if k == "cycles":
-                    m.args["cycles"] = int(v)
-                else:
-                    m.args["edge"], m.args["n"] = k, int(v)
-            elif k in ("val", "level", "low", "high"):
-                sig = signal or m.signal
-                m.args[k] = self._level(sig, it.value) if sig else \
-                    self._number(it.value, "dimensionless", k, self.scope)
-            else:  # at, from, to, td
-                key = "from" if k == "td" else k
-                if time_slot is None:
-                    m.args[key] = self._scalar(it.value, self.scope)
-                else:
-                    m.args[key] = self._number(it.value, time_slot, k.upper(), self.scope)
-
-
 def _kind_keywords():
     from .. import elements
 
