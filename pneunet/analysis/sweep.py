@@ -36,6 +36,7 @@ from typing import Any, Callable, Iterable, Sequence
 import numpy as np
 
 from ..errors import ParameterError, PneunetError
+from .store import append, open_store, read_store
 
 
 # -- points ---------------------------------------------------------------------------
@@ -360,25 +361,6 @@ class SweepResult:
         return path
 
 
-def read_store(path) -> dict:
-    """Records of a JSON-lines store by key (a torn last line is ignored)."""
-    done = {}
-    path = Path(path)
-    if not path.exists():
-        return done
-    with path.open() as fh:
-        for line in fh:
-            line = line.strip()
-            if not line:
-                continue
-            try:
-                rec = json.loads(line)
-            except json.JSONDecodeError:
-                continue  # interrupted while writing this line
-            done[rec["key"]] = rec
-    return done
-
-
 def _is_dask(executor) -> bool:
     return type(executor).__module__.split(".")[0] == "distributed"
 
@@ -409,10 +391,7 @@ def run_sweep(build: Callable, points: Sequence[dict], analysis: Callable | None
             or (keep_traces and "trace" not in done[k] and not store)]
     records = {k: done[k] for k in keys if k in done}
     wall = time.perf_counter()
-    fh = None
-    if store:
-        Path(store).parent.mkdir(parents=True, exist_ok=True)
-        fh = open(store, "a")
+    fd = open_store(store) if store else None  # before any work: a torn tail cut off
     from ..progress import progress_bar
 
     bar = progress_bar(progress, total=len(points), initial=len(points) - len(todo), unit="pt",
@@ -424,21 +403,18 @@ def run_sweep(build: Callable, points: Sequence[dict], analysis: Callable | None
         if trace is not None:
             traces[rec["key"]] = pd.DataFrame(trace)
         records[rec["key"]] = rec
-        if fh is not None:
-            fh.write(json.dumps(rec, default=_json_default) + "\n")
-            fh.flush()
+        if fd is not None:
+            append(fd, rec, _json_default)
         bar.update(1)
 
     n_workers = 1
     own_pool = None
+    finished_all = False
     try:
         if executor is None and (workers or os.cpu_count() or 1) > 1 and len(todo) > 1:
-            import multiprocessing
-            from concurrent.futures import ProcessPoolExecutor
+            from ..workers import process_pool
 
-            n_workers = min(workers or os.cpu_count() or 1, len(todo))
-            own_pool = ProcessPoolExecutor(max_workers=n_workers,
-                                           mp_context=multiprocessing.get_context("fork"))
+            own_pool = process_pool(min(workers or os.cpu_count() or 1, len(todo)))
             executor = own_pool
         if executor is None:
             for _, p in todo:
@@ -468,12 +444,18 @@ def run_sweep(build: Callable, points: Sequence[dict], analysis: Callable | None
                 for f in futures:
                     f.cancel()
                 raise
+        finished_all = True
     finally:
         if own_pool is not None:
-            own_pool.shutdown(wait=True, cancel_futures=True)
+            if finished_all:
+                own_pool.shutdown(wait=True)
+            else:  # Ctrl-C or an error: finished points are stored, the rest is dropped
+                from ..workers import stop
+
+                stop(own_pool)
         bar.close()
-        if fh is not None:
-            fh.close()
+        if fd is not None:
+            os.close(fd)
     table = records_table([records[k] for k in keys if k in records])
     return SweepResult(table, traces, computed=len(todo), reused=len(points) - len(todo),
                        failed=int(table["error"].notna().sum()) if len(table) else 0,

@@ -63,6 +63,7 @@ def register(subparsers) -> None:
 def main(args) -> int:
     from ..errors import ParameterError
     from ..analysis import sweep as S
+    from ..analysis.store import check_writable
 
     if bool(args.netlist) == bool(args.circuit):
         raise ParameterError("give a netlist file or --circuit oscillator (not both)")
@@ -117,6 +118,9 @@ def main(args) -> int:
 
     out = Path(args.out)
     store = Path(args.store) if args.store else out.with_suffix(out.suffix + ".jsonl")
+    for path, what in ((out, "table"), (args.plot, "plot")):
+        if path:
+            check_writable(path, what, "choose a writable file with --out / --plot")
     if args.fresh and store.exists():
         store.unlink()
     executor, cluster = None, None
@@ -133,6 +137,12 @@ def main(args) -> int:
     try:
         result = S.run_sweep(build, points, analysis, executor=executor, workers=args.workers,
                              store=store, progress=progress, retry_failed=args.retry_failed)
+    except KeyboardInterrupt:
+        kept = len(set(S.read_store(store)) & {S.point_key(p) for p in points})
+        print(f"sweep interrupted: {kept} of {len(points)} points are finished and kept in "
+              f"{store}; rerun the same command to compute the other {len(points) - kept}",
+              file=sys.stderr)
+        return 130
     finally:
         if executor is not None:
             executor.close()

@@ -195,16 +195,13 @@ class TraceResidual:
 
 
 def process_pool(workers: int | None):
-    """A fork-based process pool of ``workers`` (None: up to 2, the cores shared here),
-    or None for one worker."""
-    import multiprocessing
+    """A fork-based process pool of ``workers`` (None: up to 2, the cores shared here)
+    whose workers die with this process (:mod:`pneunet.workers`), or None for one."""
     import os
-    from concurrent.futures import ProcessPoolExecutor
 
-    n = min(2, os.cpu_count() or 1) if workers is None else int(workers)
-    if n < 2 or "fork" not in multiprocessing.get_all_start_methods():
-        return None
-    return ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context("fork"))
+    from ..workers import process_pool as guarded_pool
+
+    return guarded_pool(min(2, os.cpu_count() or 1) if workers is None else int(workers))
 
 
 def synthetic_trace(build: Callable, params: dict, t_end: float, *, dt: float = 0.05,

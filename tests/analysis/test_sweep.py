@@ -1,10 +1,3 @@
-import json
-import os
-import signal
-import subprocess
-import sys
-import textwrap
-import time
 
 import numpy as np
 import pytest
@@ -69,45 +62,3 @@ def test_local_pool_and_dask_give_identical_tables(tmp_path):
     b = remote.table.drop(columns="elapsed_s")
     assert a.equals(b)
     assert set(a["regime"]) == {"oscillation", "equilibrium"}
-
-
-SCRIPT = textwrap.dedent("""
-    import sys
-    from pneunet.analysis import sweep as S
-    from pneunet.analysis.circuits import oscillator
-    pts = [dict(p, V=50.0) for p in S.grid(S.lin("Rout", 0.0, 1.5, 3), S.lin("Rvent", 2.5, 3.5, 3))]
-    S.run_sweep(oscillator, pts, S.OscillationMeasure(t_stop=6.0), workers=1, store=sys.argv[1],
-                progress=False)
-""")
-
-
-def test_killed_sweep_resumes_with_only_the_missing_points(tmp_path):
-    store = tmp_path / "sweep.jsonl"
-    script = tmp_path / "run.py"
-    script.write_text(SCRIPT)
-    proc = subprocess.Popen([sys.executable, str(script), str(store)], start_new_session=True)
-    deadline = time.time() + 120
-    try:
-        while time.time() < deadline:
-            if store.exists() and len(store.read_text().splitlines()) >= 3:
-                break
-            if proc.poll() is not None:
-                pytest.fail("the sweep finished before it could be killed")
-            time.sleep(0.05)
-    finally:
-        os.killpg(proc.pid, signal.SIGKILL)
-        proc.wait()
-    before = {json.loads(line)["key"] for line in store.read_text().splitlines()
-              if line.strip().endswith("}")}
-    assert 3 <= len(before) < 9
-    pts = small_grid(3)
-    r = S.run_sweep(oscillator, pts, FAST, workers=1, store=store, progress=False)
-    assert r.reused == len(before) and r.computed == 9 - len(before)
-    keys = [json.loads(line)["key"] for line in store.read_text().splitlines()
-            if line.strip().endswith("}")]
-    assert sorted(set(keys)) == sorted(S.point_key(p) for p in pts)
-    assert len(r.table) == 9 and r.table["error"].isna().all()
-    # a second rerun computes nothing
-    again = S.run_sweep(oscillator, pts, FAST, workers=1, store=store, progress=False)
-    assert again.computed == 0
-    assert again.table.drop(columns="elapsed_s").equals(r.table.drop(columns="elapsed_s"))

@@ -1,0 +1,71 @@
+"""Local process pools whose workers never outlive their parent.
+
+A worker of :func:`process_pool` dies with the process that made the pool, however
+that process ends (SIGKILL included): on Linux the kernel kills it
+(``prctl(PR_SET_PDEATHSIG, SIGKILL)``), and everywhere a watchdog thread ends it within
+:data:`WATCH_S` seconds of its parent's death.  Workers ignore SIGINT: on Ctrl-C the
+parent stops them with :func:`stop` and keeps what has finished.
+"""
+from __future__ import annotations
+
+import os
+import signal
+import sys
+import threading
+import time
+
+#: seconds between the watchdog's checks that the parent is alive
+WATCH_S = 0.5
+_PR_SET_PDEATHSIG = 1
+
+
+def process_pool(workers: int):
+    """A fork-based ``ProcessPoolExecutor`` of ``workers`` guarded processes, or None
+    when fork is not available or ``workers`` < 2."""
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    if workers < 2 or "fork" not in multiprocessing.get_all_start_methods():
+        return None
+    return ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("fork"),
+                               initializer=_guard, initargs=(os.getpid(),))
+
+
+def stop(pool) -> None:
+    """End ``pool`` now: pending work cancelled, running workers killed (after Ctrl-C;
+    a second Ctrl-C meanwhile is ignored, so the stop completes)."""
+    main = threading.current_thread() is threading.main_thread()
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN) if main else None
+    try:
+        processes = list((getattr(pool, "_processes", None) or {}).values())
+        pool.shutdown(wait=False, cancel_futures=True)
+        for process in processes:
+            if process.is_alive():
+                process.kill()
+        for process in processes:
+            process.join(timeout=5)
+        manager = getattr(pool, "_executor_manager_thread", None)
+        if manager is not None:  # else the interpreter waits for it at exit
+            manager.join(timeout=5)
+    finally:
+        if main:
+            signal.signal(signal.SIGINT, previous)
+
+
+def _guard(parent: int) -> None:
+    """Worker initializer: die with ``parent``; leave SIGINT to the parent."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if sys.platform.startswith("linux"):
+        import ctypes
+
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+    if os.getppid() != parent:  # the parent died before the guard was set
+        os._exit(1)
+    threading.Thread(target=_watch, args=(parent,), daemon=True, name="parent-watch").start()
+
+
+def _watch(parent: int) -> None:
+    while os.getppid() == parent:
+        time.sleep(WATCH_S)
+    os._exit(1)

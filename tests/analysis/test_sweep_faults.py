@@ -1,0 +1,145 @@
+"""A sweep killed with SIGKILL at several moments and restarted loses and repeats no
+finished point, leaves no orphan worker and no torn store line, and ends equal to an
+uninterrupted run; Ctrl-C stops it with what has finished kept and one line; an
+output that cannot be written is reported before any work."""
+import json
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+
+import pytest
+
+from pneunet.analysis import sweep as S
+from pneunet.analysis.circuits import oscillator
+from pneunet.cli import main
+
+pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+
+POINTS = [dict(p, V=50.0) for p in S.grid(S.lin("Rout", 0.0, 1.5, 4), S.lin("Rvent", 2.5, 3.5, 3))]
+FAST = S.OscillationMeasure(t_stop=3.0)
+# two pool workers, each point held 0.15 s so that a kill lands while points are running
+SCRIPT = textwrap.dedent("""
+    import sys, time
+    from pneunet.analysis import sweep as S
+    from pneunet.analysis.circuits import oscillator
+
+    class Slow(S.OscillationMeasure):
+        def __call__(self, circuit):
+            time.sleep(0.15)
+            return super().__call__(circuit)
+
+    pts = [dict(p, V=50.0) for p in S.grid(S.lin("Rout", 0.0, 1.5, 4), S.lin("Rvent", 2.5, 3.5, 3))]
+    S.run_sweep(oscillator, pts, Slow(t_stop=3.0), workers=2, store=sys.argv[1], progress=False)
+""")
+
+
+def children(pid):
+    """Pids whose parent is ``pid``."""
+    out = []
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            try:
+                with open(f"/proc/{entry}/stat") as fh:
+                    stat = fh.read()
+            except OSError:
+                continue
+            if int(stat.rsplit(")", 1)[1].split()[1]) == pid:
+                out.append(int(entry))
+    return out
+
+
+def alive(pid):
+    try:
+        with open(f"/proc/{pid}/stat") as fh:
+            return fh.read().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
+def lines(store):
+    return store.read_bytes().split(b"\n")[:-1] if store.exists() else []
+
+
+def kill_after(script, store, n_lines):
+    """Start a sweep, SIGKILL its main process once the store holds ``n_lines`` records
+    and its two workers run; returns the workers' pids."""
+    proc = subprocess.Popen([sys.executable, str(script), str(store)])
+    deadline = time.time() + 60
+    try:
+        while time.time() < deadline:
+            workers = children(proc.pid)
+            if len(workers) >= 2 and len(lines(store)) >= n_lines:
+                break
+            assert proc.poll() is None, "the sweep finished before it could be killed"
+            time.sleep(0.01)
+        else:
+            pytest.fail("the sweep never reached the kill point")
+    finally:
+        proc.send_signal(signal.SIGKILL)
+        proc.wait()
+    return workers
+
+
+def test_sigkill_at_several_moments_then_resume_equals_an_uninterrupted_run(tmp_path):
+    script = tmp_path / "run.py"
+    script.write_text(SCRIPT)
+    store = tmp_path / "sweep.jsonl"
+    for n_lines in (0, 3, 7):  # before the first point, early, late
+        workers = kill_after(script, store, n_lines)
+        deadline = time.time() + 5
+        while any(alive(w) for w in workers) and time.time() < deadline:
+            time.sleep(0.05)
+        assert not any(alive(w) for w in workers), "pool workers outlived the killed sweep"
+        keys = [json.loads(line)["key"] for line in lines(store)]
+        assert len(keys) == len(set(keys)) >= n_lines  # no point written twice
+    # a kill while a record is written leaves a torn last line: cut the last one in half
+    text = store.read_bytes()
+    store.write_bytes(text[:len(text) - 1 - len(lines(store)[-1]) // 2])
+    finished = len(lines(store))  # whole lines, the torn one excluded
+    resumed = S.run_sweep(oscillator, POINTS, FAST, workers=1, store=store, progress=False)
+    assert (resumed.reused, resumed.computed) == (finished, len(POINTS) - finished)
+    records = [json.loads(line) for line in lines(store)]  # every line whole JSON
+    assert sorted(r["key"] for r in records) == sorted(S.point_key(p) for p in POINTS)
+    whole = S.run_sweep(oscillator, POINTS, FAST, workers=1, progress=False)
+    assert resumed.table.drop(columns="elapsed_s").equals(whole.table.drop(columns="elapsed_s"))
+    again = S.run_sweep(oscillator, POINTS, FAST, workers=1, store=store, progress=False)
+    assert again.computed == 0
+
+
+def test_ctrl_c_stops_at_once_keeping_the_finished_points(tmp_path):
+    out = tmp_path / "map.csv"
+    store = tmp_path / "map.csv.jsonl"
+    proc = subprocess.Popen([sys.executable, "-m", "pneunet", "sweep", "--circuit", "oscillator",
+                             "--param", "Rout=lin:1.1:1.5:8", "--t-stop", "400", "--workers",
+                             "2", "--no-progress", "--out", str(out)],
+                            stderr=subprocess.PIPE, text=True, start_new_session=True)
+    deadline = time.time() + 60
+    while not lines(store) and time.time() < deadline and proc.poll() is None:
+        time.sleep(0.02)
+    workers = children(proc.pid)
+    os.killpg(proc.pid, signal.SIGINT)  # as a terminal does: the whole process group
+    t0 = time.time()
+    err = proc.communicate(timeout=30)[1]
+    assert proc.returncode == 130 and time.time() - t0 < 5
+    kept = len(lines(store))
+    assert err.strip().splitlines() == [
+        f"sweep interrupted: {kept} of 8 points are finished and kept in {store}; rerun the "
+        f"same command to compute the other {8 - kept}"], err
+    assert 1 <= kept < 8 and all(json.loads(line) for line in lines(store))
+    assert not any(alive(w) for w in workers)
+
+
+def test_unwritable_output_is_reported_before_any_work(tmp_path, capsys):
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    for option in ("--out", "--store", "--plot"):
+        target = blocker / "x.csv"
+        args = ["sweep", "--circuit", "oscillator", "--param", "Rout=lin:0:1:2",
+                "--out", str(tmp_path / "ok.csv"), option, str(target)]
+        assert main(args) == 2
+        err = capsys.readouterr().err
+        assert f"cannot write the" in err and f"{blocker} is a file, not a directory" in err
+        assert not (tmp_path / "ok.csv.jsonl").exists() or option == "--store"
