@@ -8,6 +8,7 @@ import os
 import sys
 
 from ..csvdata import TRACE_MAX_ROWS
+from . import netlist_args
 
 
 def register(subparsers) -> None:
@@ -59,6 +60,7 @@ def register(subparsers) -> None:
                    help=f"read at most N samples; a longer recording is thinned evenly with a "
                         f"notice (default {TRACE_MAX_ROWS})")
     p.add_argument("--no-progress", action="store_true", help="no progress messages on stderr")
+    netlist_args.add(p)
     p.set_defaults(func=main)
 
 
@@ -129,7 +131,8 @@ def main(args) -> int:
     if args.netlist:
         from ..analysis.sweep import NetlistBuilder
 
-        build = NetlistBuilder(args.netlist)
+        build = NetlistBuilder(args.netlist, parse=netlist_args.parse_options(args))
+        netlist_args.check_nodes(build.deck().circuit, args.strict)
     else:
         from ..analysis.circuits import oscillator as build
     _load_effects(args.effects_module)
