@@ -88,3 +88,15 @@ def test_every_python_block_runs(page, tmp_path):
 @pytest.mark.parametrize("page", WITH_STUDY, ids=lambda p: str(p.relative_to(ROOT)))
 def test_every_python_block_runs_including_the_long_ones(page, tmp_path):
     run_page(page, tmp_path, study=True)
+
+
+def test_the_gallery_shows_every_figure_make_all_draws_and_names_every_plot_function():
+    gallery = (ROOT / "docs" / "gallery.md").read_text()
+    shown = {t for t in relative_links(ROOT / "docs" / "gallery.md") if t.endswith(".png")}
+    drawn = {str(p.relative_to(ROOT / "docs")) for p in
+             (ROOT / "docs" / "figures" / "gallery").rglob("*.png")}
+    assert shown == drawn
+    script = (ROOT / "docs" / "figures" / "make_all.py").read_text()
+    plotters = {m for path in (ROOT / "pneunet").rglob("*.py")
+                for m in re.findall(r"^def (plot_\w+)", path.read_text(), re.M)}
+    assert plotters and not [f for f in plotters if f not in script and f not in gallery]

@@ -1,0 +1,104 @@
+"""Regenerate docs/figures/gallery/: one example of every figure the CLI and the Python API
+draw (shown in docs/gallery.md).  Run from anywhere (a few minutes on 2 cores):
+
+    python docs/figures/make_all.py [NAME ...]     # all figures, or only those named
+
+Each figure comes from the public plotting call the CLI uses, on the shipped netlists,
+the paper's circuits and the sample data in examples/data/.
+"""
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+OUT = Path(__file__).resolve().parent / "gallery"
+ROOT = OUT.parents[2]
+BENCH = ROOT / "examples" / "data" / "bench_axi.csv"
+RECORDING = ROOT / "examples" / "data" / "oscillator_rec.csv"
+
+
+def solution():
+    """``pneunet run --plot`` / ``Solution.plot``."""
+    from pneunet.netlist import parse_file
+
+    parse_file(ROOT / "netlists" / "oscillator.pn").circuit.tran(20.0).plot(OUT / "solution.png")
+
+
+def sweep():
+    """``pneunet sweep --plot`` with one axis (plot_sweep) and two (plot_regime_map)."""
+    from pneunet.analysis.circuits import oscillator
+    from pneunet.analysis.regime import RegimeMeasure, plot_regime_map
+    from pneunet.analysis.sweep import OscillationMeasure, grid, lin, run_sweep
+    from pneunet.analysis.sweep_plot import plot_sweep
+
+    one = run_sweep(oscillator, grid(lin("Rout", 0.0, 3.0, 13)),
+                    OscillationMeasure(t_stop=40.0), progress=False)
+    plot_sweep(one.table, "Rout", OUT / "sweep_1d.png")
+    two = run_sweep(oscillator, grid(lin("Rout", 0.2, 3.0, 8), lin("Rvent", 1.0, 6.0, 8)),
+                    RegimeMeasure(), progress=False)
+    plot_regime_map(two.table, "Rout", "Rvent", OUT / "regime_map.png")
+
+
+def branches():
+    """``pneunet branches --plot`` / ``plot_branches``."""
+    from pneunet.analysis.branches import OscillatorSpec, plot_branches, stationary_branches
+    from pneunet.analysis.circuits import oscillator
+
+    sol = oscillator({"Rout": 1.132}).tran(30.0)
+    plot_branches(stationary_branches(OscillatorSpec(Rout=1.132)), OUT / "branches.png",
+                  trajectory=(sol.pressure("tank"), sol.flow("X1")))
+
+
+def design():
+    """``plot_fill`` and ``plot_truth_table``."""
+    from pneunet.analysis import design
+    from pneunet.analysis.logic import plot_truth_table, truth_table
+    from pneunet.analysis.sweep import NetlistBuilder
+
+    design.plot_fill(design.cylinder_volume(173, 20), 0.566, 596, 96, 296,
+                     OUT / "fill_time.png", valve="axi")
+    tt = truth_table(NetlistBuilder(ROOT / "netlists" / "inverter.pn"), {"in": "Pin"},
+                     ["out1", "out2"], expected=lambda b: (1 - b[0], b[0]), t_settle=3)
+    plot_truth_table(tt, OUT / "truth_table.png", title="two inverters (netlists/inverter.pn)")
+
+
+def identify():
+    """``pneunet fit --plots`` / ``pneunet.identify.plots.all_figures``."""
+    from pneunet.identify import fit_valve, load_measurements
+    from pneunet.identify.plots import all_figures
+
+    all_figures(fit_valve(load_measurements(BENCH)), OUT / "identify")
+
+
+def diagnose():
+    """``pneunet diagnose --plots`` / ``Diagnosis.plots``."""
+    from pneunet.diagnose import diagnose as run
+    from pneunet.diagnose.scenarios import LIBRARY_SCENARIOS, bench, truth_model
+
+    leaky = truth_model({"leak": LIBRARY_SCENARIOS["leak"]})  # the axi valve with a leak
+    run(bench(leaky, seed=0), progress=False).plots(OUT / "diagnose")
+
+
+def traces():
+    """``pneunet fit-trace --plot`` (plot_fit) and ``--candidates --waterfall``
+    (plot_waterfall, also ``TraceDiagnosis.plots``)."""
+    from pneunet.analysis.circuits import oscillator
+    from pneunet.traces import diagnose_trace, fit_trace, read_trace
+    from pneunet.traces.plots import plot_fit, plot_waterfall
+
+    data = read_trace(RECORDING)
+    fit = fit_trace(oscillator, data, {"Rvent": (3.5, 1.0, 10.0)}, fixed={"Rout": 1.132})
+    plot_fit(fit, data, OUT / "trace_fit.png")
+    diag = diagnose_trace(oscillator, data, {"Rvent": (3.5, 1.0, 10.0), "V": (150, 50, 400)},
+                          fixed={"Rout": 1.132}, effects=["dead_volume"], max_nfev=20)
+    plot_waterfall(diag, OUT / "trace_waterfall.png")
+
+
+FIGURES = {f.__name__: f for f in (solution, sweep, branches, design, identify, diagnose,
+                                   traces)}
+
+if __name__ == "__main__":
+    OUT.mkdir(parents=True, exist_ok=True)
+    for name in sys.argv[1:] or FIGURES:
+        FIGURES[name]()
+        print("done:", name, flush=True)
