@@ -54,8 +54,14 @@ def draw_traces(ax, t, traces: dict, ylabel: str) -> None:
     for group in groups:
         ax.plot(t, traces[group[0]], label=" = ".join(group))
     ax.set_ylabel(ylabel)
-    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize="small", frameon=False)
+    legend_outside(ax, fontsize="small")
     if len(groups) < len(traces):
         ax.text(0.0, 1.01, "traces that coincide (within 1 % of their range) are drawn "
                 "once, labelled a = b",
                 transform=ax.transAxes, fontsize="x-small", color="0.35", va="bottom")
+
+
+def legend_outside(ax, *args, **kwargs):
+    """The axes' legend right of the axes, off the data (``args``: handles, labels)."""
+    kwargs.setdefault("frameon", False)
+    return ax.legend(*args, loc="upper left", bbox_to_anchor=(1.01, 1.0), **kwargs)

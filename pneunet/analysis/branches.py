@@ -345,7 +345,7 @@ def plot_branches(branches: Branches, path=None, ax=None, trajectory=None, title
     """Fig. 11 style plot: the stationary curve (solid attracting, dashed repelling), the
     closed branch, ṗ_c sign regions (green > 0, red < 0), turning points, equilibria and
     the predicted cycle.  ``trajectory`` = (p_c, ṁ) arrays of a simulation to overlay."""
-    from ..plotting import pyplot, save
+    from ..plotting import legend_outside, pyplot, save
 
     plt = pyplot()
     s = branches.spec
@@ -399,7 +399,7 @@ def plot_branches(branches: Branches, path=None, ax=None, trajectory=None, title
     ax.set_title(title or f"R_out = {s.Rout:g}, R_vent = {s.Rvent:g} kPa·s/mg: {branches.regime}")
     handles, labels = ax.get_legend_handles_labels()
     uniq = dict(zip(labels, handles))
-    ax.legend(uniq.values(), uniq.keys(), fontsize=7, loc="upper right")
+    legend_outside(ax, uniq.values(), uniq.keys(), fontsize=7)
     if own and path is not None:
         return save(fig, path)
     return fig

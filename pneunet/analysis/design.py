@@ -141,7 +141,7 @@ def valve_comparison(p_in: float = 596.0, p_out: float = 296.0, fill=None):
 def plot_fill(volume_ml, R, p_supply, p_from, p_to, path=None, valve=None, ambient=96.0):
     """Analytic and simulated filling curves p(t)."""
     from ..engine.circuit import Circuit
-    from ..plotting import pyplot, save
+    from ..plotting import legend_outside, pyplot, save
 
     plt = pyplot()
     t_an = fill_time(volume_ml, R, p_supply, p_from, p_to)
@@ -169,7 +169,7 @@ def plot_fill(volume_ml, R, p_supply, p_from, p_to, path=None, valve=None, ambie
     ax.axhline(p_to, color="0.5", lw=0.8, ls=":")
     ax.set_xlabel("time (ms)")
     ax.set_ylabel("pressure (kPa abs)")
-    ax.legend(fontsize=8)
+    legend_outside(ax, fontsize=8)
     ax.set_title(f"filling {volume_ml:.1f} mL from {p_from:g} to {p_to:g} kPa, supply {p_supply:g} kPa",
                  fontsize=9)
     return save(fig, path) if path is not None else fig

@@ -149,7 +149,7 @@ def demux_expected(bits):
 
 def plot_truth_table(tt: TruthTable, path=None, title=None):
     """Output pressures per input combination (bars) with the threshold line."""
-    from ..plotting import pyplot, save
+    from ..plotting import legend_outside, pyplot, save
 
     plt = pyplot()
     tab = tt.table
@@ -163,7 +163,7 @@ def plot_truth_table(tt: TruthTable, path=None, title=None):
     ax.set_xticklabels(labels)
     ax.set_xlabel("inputs " + "".join(tt.inputs))
     ax.set_ylabel("output pressure (kPa abs)")
-    ax.legend(fontsize=7, ncol=min(4, len(tt.outputs) + 1))
+    legend_outside(ax, fontsize=7)
     if title:
         ax.set_title(title, fontsize=9)
     return save(fig, path) if path is not None else fig

@@ -5,7 +5,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..plotting import pyplot, save
+from ..plotting import legend_outside, pyplot, save
 from ..truth.verdict import TOLERANCE
 from .features import FEATURE_LABELS
 from .residuals import binned_map
@@ -34,7 +34,7 @@ def plot_waterfall(diag, path):
     ax2.axvline(thr, color="#c44e52", ls=":", label=f"practical floor {thr:.2g} mg/s")
     ax2.set_xlabel("CV gain over the six-parameter model [mg/s] (95 % CI)")
     ax2.set_title("candidates, round 1 (green accepted, grey screened out)")
-    ax2.legend(fontsize=8, loc="lower right")
+    legend_outside(ax2, fontsize=8)
     fig.tight_layout()
     return save(fig, path)
 

@@ -345,7 +345,8 @@ class ValveFit(Summarized):
     plane: tuple = ()
 
     def _summary(self):
-        values = (f"{k} {getattr(self.params, k):.4g} {VALVE_PARAMETERS[k][0]}" for k in NAMES)
+        values = (f"{k} {number(getattr(self.params, k), VALVE_PARAMETERS[k][0].strip('1'))}"
+                  for k in NAMES)
         m = self.metrics
         rows = [("parameters", listed(values)),
                 ("rms flow error", number(m.get("rmse"), "mg/s", 3)),

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..plotting import pyplot, save
+from ..plotting import legend_outside, pyplot, save
 from .analyses import areas_vs_threshold, open_valve_resistance
 
 OPEN, CLOSED, WRONG, MODEL = "tab:blue", "tab:green", "tab:red", "tab:red"
@@ -33,7 +33,7 @@ def fig6a_open_valve(check, path=None):
     ax.set_title("Fully open valve (p_ctrl at atmosphere, p_in + p_out ≥ 900 kPa)", fontsize=9)
     ax.set_xlim(left=0)
     ax.set_ylim(bottom=0)
-    ax.legend(fontsize=8)
+    legend_outside(ax, fontsize=8)
     ax.grid(alpha=0.3)
     return _finish(fig, path)
 
@@ -58,7 +58,7 @@ def fig6b_separation(fit, path=None):
     ax.set_xlabel("a_in·p_in + a_out·p_out [kPa]" + f"   (a_in {p.ain:.3f}, a_out {p.aout:.3f})")
     ax.set_ylabel("p_ctrl [kPa]")
     ax.set_title(f"Open/closed separation, ṁ_min = {fit.mdot_min:.3g} mg/s", fontsize=9)
-    ax.legend(fontsize=8, loc="upper left")
+    legend_outside(ax, fontsize=8)
     ax.grid(alpha=0.3)
     return _finish(fig, path)
 
@@ -84,7 +84,7 @@ def fig6c_inverse_resistance(fit, path=None):
     ax.set_ylabel("1/R = ṁ / √(p_in² − p_out²) [mg/(s·kPa)]")
     ax.set_title(f"Valve characteristic, RMSE 1/R = {fit.metrics['rmse_inv_r']:.3g} mg/(s·kPa)",
                  fontsize=9)
-    ax.legend(fontsize=8, loc="lower right")
+    legend_outside(ax, fontsize=8)
     ax.grid(alpha=0.3)
     return _finish(fig, path)
 
@@ -159,7 +159,7 @@ def fig8_areas(fit, table=None, path=None):
         a.grid(alpha=0.3)
     ax.set_ylabel("relative effective area [-]")
     ax.set_title("A: areas from separating 1/R > 1/R_sep (dotted: √2/2 / R_f)", fontsize=9)
-    ax.legend(fontsize=8)
+    legend_outside(ax, fontsize=8)
     bx.plot(table["inv_r_sep"], 100 * table["misclassified"], "o-", color=OPEN,
             label="own plane (ã_in, ã_out, p̃_sep)")
     bx.plot(table["inv_r_sep"], 100 * table["misclassified_fixed"], "s-", color=MODEL,
@@ -167,7 +167,7 @@ def fig8_areas(fit, table=None, path=None):
     bx.axhline(1.0, color="gray", ls="--", lw=1)
     bx.set_ylabel("misclassified [%]")
     bx.set_title("B: misclassified points", fontsize=9)
-    bx.legend(fontsize=8)
+    legend_outside(bx, fontsize=8)
     return _finish(fig, path)
 
 
@@ -190,7 +190,7 @@ def fig9_seat_height(values, trends, path=None, *, title=None):
         unit = VALVE_PARAMETERS[k][0]
         ax.set_ylabel(f"{k} [{unit}]")
         ax.set_xlabel("seat height h_seat [mm]")
-        ax.legend(fontsize=7)
+        legend_outside(ax, fontsize=7)
         ax.grid(alpha=0.3)
     fig.suptitle(title or "Parameters against seat height, linear least-squares trends",
                  fontsize=10)

@@ -11,7 +11,7 @@ from .data import read_trace, signal_of_column
 def plot_fit(fit, data, path=None, signals=None):
     """Recorded vs fitted signals (top), residuals over time (middle), rms residual over
     the oscillation phase (bottom)."""
-    from ..plotting import pyplot, save
+    from ..plotting import legend_outside, pyplot, save
 
     plt = pyplot()
     df = read_trace(data)
@@ -28,13 +28,16 @@ def plot_fit(fit, data, path=None, signals=None):
         t_fit = r.loc[r["fitted"], "time_s"]
         for ax in axes[:2]:
             ax.axvspan(t_fit.min(), t_fit.max(), color="0.9", zorder=0, label="fit window")
-    axes[0].set_ylabel("kPa / mg/s")
-    axes[0].legend(fontsize=7, ncol=2)
-    axes[1].set_ylabel("residual (model − recording)")
-    axes[1].set_xlabel("time (s)")
+    units = sorted({"mg/s" if s.startswith("mdot_") else "kPa" for s in sigs})
+    axes[0].set_ylabel(("pressure (kPa abs)" if units == ["kPa"] else "flow (mg/s)"
+                        if units == ["mg/s"] else "kPa abs / mg/s"))
+    legend_outside(axes[0], fontsize=7)
+    axes[1].set_ylabel(f"residual, model − recording ({' / '.join(units)})")
+    for ax in axes[:2]:
+        ax.set_xlabel("time (s)")
     axes[2].set_xlabel("oscillation phase (0 = rising through mid level)")
-    axes[2].set_ylabel("rms residual")
-    axes[2].legend(fontsize=7)
+    axes[2].set_ylabel(f"rms residual ({' / '.join(units)})")
+    legend_outside(axes[2], fontsize=7)
     title = ", ".join(f"{k} = {v:.4g}" for k, v in fit.values.items())
     if math.isfinite(fit.period_error):
         title += f"; period error {fit.period_error:+.3g} s"

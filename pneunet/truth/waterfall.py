@@ -57,7 +57,9 @@ class Waterfall:
         ax.set_ylabel(f"held-out error [{self.unit}]")
         for xi, v in zip(x, vals):
             ax.text(xi, v, f"{v:.3g}", ha="center", va="bottom", fontsize=8)
-        ax.legend(fontsize=8, loc="upper right")
+        from ..plotting import legend_outside
+
+        legend_outside(ax, fontsize=8)
 
     def plot(self, path, title: str = "error waterfall", tolerance: float | None = None):
         """Save the waterfall as an image (PNG by suffix)."""
