@@ -228,8 +228,11 @@ def read_source(path: Path, *, limits=None, via: tuple = ()) -> SourceText:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
         line = raw.count(b"\n", 0, exc.start) + 1
-        column = exc.start - (raw.rfind(b"\n", 0, exc.start) + 1) + 1
+        start = raw.rfind(b"\n", 0, exc.start) + 1
+        end = raw.find(b"\n", exc.start)
+        column = len(raw[start:exc.start].decode("utf-8-sig")) + 1  # characters, not bytes
+        text = raw[start:end if end >= 0 else len(raw)].decode("utf-8-sig", errors="replace")
         raise NetlistError(f"byte 0x{raw[exc.start]:02x} is not UTF-8 text",
-                           span=SourceSpan(str(path), line, column, via=via),
+                           span=SourceSpan(str(path), line, column, text, via),
                            hint="save the netlist as UTF-8 (netlists are plain text)") from None
     return parse_text(text, str(path), path, limits=limits, via=via)
