@@ -3,7 +3,8 @@
 SUNDIALS writes from C: warnings through its logger to the process's stdout
 (``[WARNING][rank 0][<build path>/ida_ls.c:1687][idaLsPerf] Warning: at t = …``), and
 errors through scikit-sundae's handler, a Python ``print`` on ``sys.stdout``
-(``[IDAHandleFailure, Error: -4] At t = …``); other bindings use stderr.
+(``[IDAHandleFailure, Error: -4] At t = …``); scikits.odes prints ``[IDA ERROR]  IDASolve``
+and the message on the next line.
 
 :func:`captured` wraps a whole solve (never a step): while it runs, file
 descriptors 1 and 2 go to temporary files and ``sys.stdout``/``sys.stderr`` to
@@ -61,6 +62,7 @@ MEANINGS = {
 
 _WARNING = re.compile(r"^\[(WARNING|ERROR)\]\[rank \d+\]\[[^\]]*\]\[(\w+)\]\s*(.*)$")
 _HANDLER = re.compile(r"^\[(\w+), Error: (-?\d+)\]\s*(.*)$")
+_LEGACY = re.compile(r"^\[IDA (?:ERROR|WARNING)\]\s+(\w+)$")
 _TIME = re.compile(r"\bat t = ([-+]?[0-9.]+(?:[eE][-+]?\d+)?)", re.IGNORECASE)
 
 
@@ -68,14 +70,22 @@ def parse(text: str) -> tuple[list[SolverMessage], str]:
     """The SUNDIALS messages in ``text``, and the rest of it (blank lines around
     messages dropped)."""
     found, rest = [], []
-    for line in text.splitlines(keepends=True):
+    lines = text.splitlines(keepends=True)
+    while lines:
+        line = lines.pop(0)
         bare = line.strip()
-        warning, handler = _WARNING.match(bare), _HANDLER.match(bare)
+        warning, handler, legacy = (_WARNING.match(bare), _HANDLER.match(bare),
+                                    _LEGACY.match(bare))
         if warning:
             kind = warning.group(2)
             body = re.sub(r"^Warning:\s*", "", warning.group(3))
         elif handler:
             kind, body = f"{handler.group(1)} {handler.group(2)}", handler.group(3)
+        elif legacy:  # scikits.odes: the message on the indented lines that follow
+            kind, body = legacy.group(1), ""
+            while lines and lines[0].startswith("  "):
+                body += " " + lines.pop(0).strip()
+            body = body.strip()
         else:
             rest.append(line)
             continue
@@ -128,13 +138,26 @@ class Diagnostics:
             when = "" if k["first_t"] is None else (
                 f" at t = {k['first_t']:.4g} s" if k["count"] == 1 or k["first_t"] == k["last_t"]
                 else f" between t = {k['first_t']:.4g} and {k['last_t']:.4g} s")
-            meaning = MEANINGS.get(kind.split()[-1], k["text"])
+            meaning = MEANINGS.get(_code(kind, k["text"]), k["text"].rstrip("."))
             verdict = ("the integrator recovered: the result passed its error test" if
                        self.recovered else "the simulation stopped: the result ends there")
             where = f" near {self.where}" if self.where and not self.recovered else ""
             times = "" if k["count"] == 1 else f" ({k['count']} times)"
             lines.append(f"IDA {kind}{times}{when}{where}: {meaning}; {verdict}")
         return lines
+
+
+#: message texts of the bindings that print no error code, and the code they stand for
+_TEXT_CODES = (("corrector convergence failed", "-4"), ("error test failed", "-3"),
+               ("mxstep", "-1"))
+
+
+def _code(kind: str, text: str) -> str:
+    """The IDA error code of a message kind ('-4'), or its reporting function."""
+    code = kind.split()[-1]
+    if code in MEANINGS:
+        return code
+    return next((c for words, c in _TEXT_CODES if words in text), code)
 
 
 _announced: set = set()  # (kind, recovered) already shown in this process

@@ -36,6 +36,14 @@ def test_parse_takes_kind_time_and_text_without_build_path_and_keeps_other_outpu
     assert rest == "user output\n"
 
 
+def test_parse_reads_the_scikits_odes_format_and_names_what_it_means():
+    messages, rest = parse("\n[IDA ERROR]  IDASolve\n  At t = 5.9999 and h = 3.6e-43, the "
+                           "corrector convergence failed repeatedly or with |h| = hmin.\n\n")
+    assert [(m.kind, m.time) for m in messages] == [("IDASolve", 5.9999)] and rest == ""
+    sentence = diagnostics.Diagnostics(tuple(messages)).sentences()[0]
+    assert "Newton's corrector did not converge" in sentence and "recovered" in sentence
+
+
 def test_recovered_solver_failures_are_one_warning_counted_in_stats_and_never_raw(capfd):
     # the fold indicator turned almost off: IDA's corrector fails at each fold, the
     # driver restarts it with small steps and finishes
@@ -117,6 +125,7 @@ def _lenient(circuit):
     return {"x": 1.0}
 
 
+@pytest.mark.filterwarnings("ignore::pneunet.engine.diagnostics.SolverWarning")
 def test_sweep_counts_points_with_messages_and_a_swallowed_solver_failure_as_failed(capfd):
     from pneunet.analysis.sweep import run_sweep
 
