@@ -45,8 +45,8 @@ class Table:
     notes: list[str] = field(default_factory=list)
 
 
-def _where(path, line, column=None) -> str:
-    return f"{path}:{line}" + (f": column {column}" if column else "")
+def _at(path, line) -> str:
+    return f"{path}:{line}"
 
 
 class CsvFile:
@@ -57,19 +57,19 @@ class CsvFile:
         self.path = Path(path)
         self.source = str(path)
         if not self.path.exists():
-            raise DataError(f"no such file: {self.source}", hint="check the path")
+            raise DataError("no such file", where=self.source, hint="check the path")
         if not self.path.is_file():
-            raise DataError(f"{self.source} is not a regular file", hint="give a CSV file")
+            raise DataError("not a regular file", where=self.source, hint="give a CSV file")
         with self.path.open("rb") as fh:
             head = fh.read(BLOCK_BYTES)
         if not head.strip():
-            raise DataError(f"{self.source}: the file is empty",
+            raise DataError("the file is empty", where=self.source,
                             hint="a CSV needs a header row (time_s,...) and data rows")
         if head[:2] in (b"\xff\xfe", b"\xfe\xff") or b"\x00" in head:
             kind = "UTF-16 text" if head[:2] in (b"\xff\xfe", b"\xfe\xff") else \
                 "NUL bytes (UTF-16 text or a binary file)"
             line = head[:max(head.find(b"\x00"), 0)].count(b"\n") + 1
-            raise DataError(f"{_where(self.source, line)}: the file holds {kind}, not UTF-8",
+            raise DataError(f"the file holds {kind}, not UTF-8", where=_at(self.source, line),
                             hint=UTF8_HINT)
         self._skip = 3 if head.startswith(b"\xef\xbb\xbf") else 0
         number = 0
@@ -79,7 +79,7 @@ class CsvFile:
             if text.strip() and not text.lstrip().startswith("#"):
                 break
         else:
-            raise DataError(f"{self.source}: no header row (only comments or blank lines)",
+            raise DataError("no header row (only comments or blank lines)", where=self.source,
                             hint="add a header row such as time_s,p_in_kPa,...")
         self.header_line = number
         self.columns = _header(text, self.source, number)
@@ -112,8 +112,8 @@ class CsvFile:
                 parts = [whole[(whole["row"].to_numpy() - 1) % stride == 0]]
                 kept = len(parts[0])
         if total == 0:
-            raise DataError(f"{self.source}: a header (line {self.header_line}) but no data rows",
-                            hint="the file ends after its header")
+            raise DataError(f"a header (line {self.header_line}) but no data rows",
+                            where=self.source, hint="the file ends after its header")
         frame = pd.concat(parts, ignore_index=True) if len(parts) > 1 else parts[0]
         frame = frame.reset_index(drop=True)
         notes = []
@@ -150,7 +150,8 @@ class CsvFile:
                 lines = text.split("\n")
                 if lines and lines[-1] == "":
                     lines.pop()
-                keep = [i for i, s in enumerate(lines) if s.strip() and not s.lstrip().startswith("#")]
+                keep = [i for i, s in enumerate(lines)
+                        if s.strip() and not s.lstrip().startswith("#")]
                 numbers = np.asarray(keep, dtype=np.int64) + line_base + 1
                 line_base += len(lines)
                 if not seen_header:
@@ -189,26 +190,26 @@ def _decode(data: bytes, source, first_line: int) -> str:
         line = first_line + before.count(b"\n")
         column = exc.start - (before.rfind(b"\n") + 1) + 1
         byte = data[exc.start:exc.start + 1].hex().upper()
-        raise DataError(f"{_where(source, line)}: byte 0x{byte} at character {column} is not "
-                        f"UTF-8 (Latin-1 or Windows-1252 text?)", hint=UTF8_HINT) from None
+        raise DataError(f"byte 0x{byte} at character {column} is not UTF-8 (Latin-1 or "
+                        f"Windows-1252 text?)", where=_at(source, line), hint=UTF8_HINT) from None
 
 
 def _header(text: str, source, line: int) -> list[str]:
     names = [c.strip() for c in next(csv.reader([text.rstrip("\r")]))]
-    where = _where(source, line)
+    where = _at(source, line)
     if len(names) == 1 and any(sep in names[0] for sep in (";", "\t")):
         sep = "semicolons" if ";" in names[0] else "tabs"
-        raise DataError(f"{where}: the header is separated by {sep}, not commas",
+        raise DataError(f"the header is separated by {sep}, not commas", where=where,
                         hint="save as comma-separated CSV with '.' as decimal point")
     if all(_is_number(n) for n in names):
-        raise DataError(f"{where}: the first line that is not a comment holds numbers, not "
-                        f"column names", hint="add a header row such as time_s,p_in_kPa,...")
+        raise DataError("the first line that is not a comment holds numbers, not column names",
+                        where=where, hint="add a header row such as time_s,p_in_kPa,...")
     for i, name in enumerate(names):
         if not name:
-            raise DataError(f"{where}: header field {i + 1} has no name",
+            raise DataError(f"header field {i + 1} has no name", where=where,
                             hint="name every column (a trailing comma makes an empty one)")
         if names.index(name) != i:
-            raise DataError(f"{where}: column {name} appears twice in the header",
+            raise DataError(f"column {name} appears twice in the header", where=where,
                             hint="give every column its own name")
     return names
 
@@ -230,9 +231,10 @@ def _check_fields(body, numbers, n_fields, source) -> None:
     bad = [i for i in bad if i not in quoted]
     if bad:
         i = bad[0]
-        raise DataError(f"{_where(source, numbers[i])}: {counts[i]} fields, the header has "
-                        f"{n_fields}", hint="every row needs one value per column "
-                                            "(a ragged or cut row; fix or delete it)")
+        raise DataError(f"{counts[i]} fields, the header has {n_fields}",
+                        where=_at(source, numbers[i]),
+                        hint="every row needs one value per column (a ragged or cut row; fix "
+                             "or delete it)")
 
 
 def _numbers(values, column: str, numbers, source):
@@ -248,9 +250,10 @@ def _numbers(values, column: str, numbers, source):
         text &= ~np.isin(values.to_numpy(dtype=object), np.array(_NA_WORDS, dtype=object))
     if text.any():
         i = int(np.flatnonzero(text)[0])
-        raise DataError(f"{_where(source, numbers[i], column)}: {values.iloc[i]!r} is not a "
-                        f"number", hint="only numbers in data columns, '.' as decimal point, "
-                                        "no units in the cells")
+        raise DataError(f"column {column}: {values.iloc[i]!r} is not a number",
+                        where=_at(source, numbers[i]),
+                        hint="only numbers in data columns, '.' as decimal point, no units in "
+                             "the cells")
     return out
 
 
@@ -265,7 +268,7 @@ def missing_column(source, name: str, found, hint: str = "", taken=()) -> DataEr
     spare = [str(c) for c in found if c not in taken]
     close = difflib.get_close_matches(name, spare, n=1, cutoff=0.6)
     text = f"did you mean {close[0]}? " if close else ""
-    return DataError(f"{source}: column {name} is missing",
+    return DataError(f"column {name} is missing", where=str(source),
                      hint=text + "columns found: " + ", ".join(map(str, found))
                      + (f"; {hint}" if hint else ""))
 

@@ -91,12 +91,12 @@ def _unit_for(column: str, units: dict) -> str | None:
 def _resolve_columns(names, source, columns, units, notes) -> tuple[dict, set]:
     """Renames {file name: canonical} for the column mapping and for canonical stems
     with another unit (``p_in_bar``, ``p_in_kpa``, ``mdot_g_s``, ``time_ms``: the unit
-    goes into ``units``); the gauge columns; DataError for a missing column."""
-    rename, gauge_cols = {}, set()
+    goes into ``units``); the gauge columns {canonical: file name}; DataError for a missing column."""
+    rename, gauge_cols = {}, {}
     for old, new in (columns or {}).items():
         if old not in names:
-            raise DataError(f"{source}: the column mapping names {old}, which is not in the "
-                            f"data", hint=f"columns found: {', '.join(map(str, names))}")
+            raise DataError(f"the column mapping names {old}, which is not in the data",
+                            where=source, hint="columns found: " + ", ".join(map(str, names)))
         rename[old] = new
     present = {rename.get(n, n) for n in names}
     for name in names:
@@ -105,7 +105,7 @@ def _resolve_columns(names, source, columns, units, notes) -> tuple[dict, set]:
         try:
             cu = column_unit(name)
         except DataError as err:
-            raise DataError(f"{source}: {err.message}", hint=err.hint) from None
+            raise DataError(err.message, where=source, hint=err.hint) from None
         if cu is None or cu.canonical not in REQUIRED or cu.canonical in present \
                 or (cu.is_canonical and name == cu.canonical):
             continue
@@ -113,7 +113,7 @@ def _resolve_columns(names, source, columns, units, notes) -> tuple[dict, set]:
         present.add(cu.canonical)
         units.setdefault(cu.canonical, cu.pint_unit)
         if cu.gauge:
-            gauge_cols.add(cu.canonical)
+            gauge_cols[cu.canonical] = name
         notes.append(f"column {name} read as {cu.canonical} (unit {cu.pint_unit}"
                      f"{', gauge' if cu.gauge else ''})")
     for c in REQUIRED:
@@ -131,8 +131,9 @@ def _numeric(frame, source) -> None:
         bad = values.isna() & frame[column].notna()
         if bad.any():
             rows = frame.loc[bad, "row"].to_numpy()
-            raise DataError(f"{source}: column {column} holds text that is not a number in "
+            raise DataError(f"column {column} holds text that is not a number in "
                             f"row(s) {_rows_text(rows)} (e.g. {frame.loc[bad, column].iloc[0]!r})",
+                            where=source,
                             hint="use '.' as decimal point and only numbers in data columns")
         frame[column] = values.astype(float)
 
@@ -141,10 +142,11 @@ def _convert_units(frame, source, units, gauge, gauge_cols, ambient_kpa) -> None
     from ..units import to_internal
 
     if (gauge or gauge_cols) and ambient_kpa is None:
-        what = "gauge pressures" if gauge else f"the gauge column(s) {', '.join(sorted(gauge_cols))}"
-        raise DataError(f"{source}: {what} need the ambient (barometric) pressure",
+        what = "gauge pressures" if gauge else "the gauge column(s) " + ", ".join(
+            sorted(gauge_cols.values()))
+        raise DataError(f"{what} need the ambient (barometric) pressure",
                         hint="pass ambient_kpa (CLI --ambient), e.g. 96 kPa at 480 m as in "
-                             "the paper, 101.325 kPa at sea level")
+                             "the paper, 101.325 kPa at sea level", where=source)
     try:
         for column in PRESSURES:
             frame[column] = to_internal(frame[column].to_numpy(), _unit_for(column, units) or "kPa",
@@ -155,7 +157,7 @@ def _convert_units(frame, source, units, gauge, gauge_cols, ambient_kpa) -> None
             if unit:
                 frame[column] = to_internal(frame[column].to_numpy(), unit, slot, name=column)
     except ParameterError as exc:
-        raise DataError(f"{source}: {exc.message}", hint=exc.hint) from None
+        raise DataError(exc.message, where=source, hint=exc.hint) from None
 
 
 def _row_problems(frame):
@@ -211,9 +213,9 @@ def _exclude(frame, source, lines, on_invalid):
         if lines:
             where += " (file lines " + _rows_text(frame.loc[mask, "line"].to_numpy()) + ")"
         if on_invalid == "raise":
-            raise DataError(f"{source}: {mask.sum()} row(s) with {reason}: data row(s) {where}",
+            raise DataError(f"{mask.sum()} row(s) with {reason}: data row(s) {where}",
                             hint=_HINTS[reason[:5]] + "; or pass on_invalid='exclude' (CLI "
-                                 "--exclude-invalid) to drop them with a report")
+                                 "--exclude-invalid) to drop them with a report", where=source)
         part = frame.loc[mask].copy()
         part["reason"] = reason
         parts.append(part)
@@ -236,9 +238,9 @@ def _time_order(frame, source, notes):
     i = int(np.flatnonzero(step <= 0)[0])
     at = frame.iloc[i + 1]
     where = f"line {int(at['line'])}" if "line" in frame else f"data row {int(at['row'])}"
-    raise DataError(f"{source}: column time_s goes back at {where} (t = {t[i + 1]:g} s after "
+    raise DataError(f"column time_s goes back at {where} (t = {t[i + 1]:g} s after "
                     f"{t[i]:g} s)", hint="sort the rows by time_s; a file joining several runs "
-                                         "needs times that continue from run to run")
+                                         "needs times that continue from run to run", where=source)
 
 
 def _read_file(path, columns, units, notes, max_rows):
@@ -310,8 +312,9 @@ def load_measurements(path_or_df, *, ambient_kpa=None, gauge=False, units=None, 
         _check_not_gauge(frame, source)
     frame, excluded = _exclude(frame, source, lines, on_invalid)
     if len(frame) < MIN_ROWS:
-        raise DataError(f"{source}: {len(frame)} valid row(s); a fit needs at least {MIN_ROWS} "
+        raise DataError(f"{len(frame)} valid row(s); a fit needs at least {MIN_ROWS} "
                         f"(several sweeps of held points)",
+                        where=source,
                         hint="see the excluded rows" if len(excluded) else "measure more points")
     frame = _time_order(frame, source, notes)
     bias = _remove_bias(frame, flow_bias, notes)
@@ -323,16 +326,18 @@ def load_measurements(path_or_df, *, ambient_kpa=None, gauge=False, units=None, 
 def _select_valve(frame, source, valve):
     if valve is not None:
         if "valve" not in frame:
-            raise DataError(f"{source}: valve={valve!r} given but the data has no 'valve' column")
+            raise DataError(f"valve={valve!r} given but the data has no 'valve' column",
+                            where=source)
         chosen = frame["valve"].astype(str) == str(valve)
         if not chosen.any():
-            raise DataError(f"{source}: no rows for valve {valve!r}",
-                            hint=f"valves in the file: {sorted(frame['valve'].astype(str).unique())}")
+            raise DataError(f"no rows for valve {valve!r}",
+                            where=source, hint="valves in the file: "
+                            + ", ".join(sorted(frame["valve"].astype(str).unique())))
         return frame[chosen]
     if "valve" in frame and frame["valve"].nunique(dropna=True) > 1:
         ids = sorted(frame["valve"].astype(str).unique())
-        raise DataError(f"{source}: the file holds {len(ids)} valves ({', '.join(ids[:8])})",
-                        hint="choose one with valve=ID (CLI --valve ID)")
+        raise DataError(f"the file holds {len(ids)} valves ({', '.join(ids[:8])})",
+                        hint="choose one with valve=ID (CLI --valve ID)", where=source)
     return frame
 
 
@@ -343,11 +348,11 @@ def _check_not_gauge(frame, source) -> None:
         low = values < GAUGE_SUSPECT_KPA
         if np.count_nonzero(low) > max(2, 0.01 * len(values)):
             raise DataError(
-                f"{source}: {column} has {np.count_nonzero(low)} values below "
+                f"{column} has {np.count_nonzero(low)} values below "
                 f"{GAUGE_SUSPECT_KPA:g} kPa absolute (lowest {np.nanmin(values):.3g} kPa): "
                 f"these look like gauge pressures passed as absolute",
-                hint="pass gauge=True with ambient_kpa (CLI --gauge --ambient 96); the model "
-                     "needs absolute pressures")
+                where=source, hint="pass gauge=True with ambient_kpa (CLI --gauge --ambient 96); "
+                                   "the model needs absolute pressures")
 
 
 def _remove_bias(frame, flow_bias, notes) -> float:
