@@ -180,6 +180,9 @@ class _Builder(ModelCards, AnalysisStatements, MeasureStatements):
 
     def _scalar(self, word: Word, scope) -> float:
         """A value without a slot: expression, number with scale factor or unit, or a name."""
+        if not isinstance(word, Word):
+            raise _err(f"expected a number, got {word}", word,
+                       "write a number, or an expression in {}")
         text = word.text
         if text.startswith("{") and text.endswith("}") and _BRACES.fullmatch(text):
             return evaluate(text[1:-1], scope, word.span, word.span.column + 1,
