@@ -69,7 +69,7 @@ def run(args) -> int:
     for spec in args.plugin:
         _load_plugin(spec)
     diag = diagnose(data, effects=args.effects, n_splits=args.folds,
-                    max_effects=args.max_effects, progress=not args.no_progress)
+                    max_effects=args.max_effects, progress=not (args.no_progress or args.json))
     if args.plots:
         diag.plots(args.plots)
     if args.model_out:

@@ -239,7 +239,7 @@ class _Capture:
 def _fileno(stream):
     try:
         return stream.fileno()
-    except (OSError, ValueError, io.UnsupportedOperation):
+    except (AttributeError, OSError, ValueError, io.UnsupportedOperation):
         return None
 
 

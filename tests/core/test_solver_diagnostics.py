@@ -136,3 +136,41 @@ def test_sweep_counts_points_with_messages_and_a_swallowed_solver_failure_as_fai
     assert stopping.failed == 1
     assert "stopped" in stopping.table["error"].iloc[0]
     assert_no_raw_sundials("".join(capfd.readouterr()))
+
+
+class _Stream:
+    def __init__(self, tty):
+        self.tty, self.text = tty, ""
+
+    def isatty(self):
+        return self.tty
+
+    def write(self, text):
+        self.text += text
+
+    def flush(self):
+        pass
+
+
+@pytest.mark.parametrize("tty", [False, True])
+def test_progress_bars_draw_only_on_a_terminal(monkeypatch, tty):
+    import sys
+
+    from pneunet.progress import progress_bar
+
+    stream = _Stream(tty)
+    monkeypatch.setattr(sys, "stderr", stream)
+    bar = progress_bar(True, total=2, desc="transient")
+    bar.update(2)
+    bar.close()
+    assert ("transient" in stream.text) is tty
+    assert progress_bar(False, total=2).disable
+
+
+def test_a_transient_bar_reaches_the_terminal_through_the_solver_capture(monkeypatch):
+    import sys
+
+    stream = _Stream(True)
+    monkeypatch.setattr(sys, "stderr", stream)
+    oscillator().tran(1.0, progress=True)
+    assert "transient" in stream.text and "1/1 s" in stream.text
