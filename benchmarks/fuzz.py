@@ -70,7 +70,9 @@ SPECIAL = ["1e999999", "-1e400", "1e-400", "1e-300mL", "nan", "inf", "-inf", "0"
            "}", "(", ")", "=", '"', "+", "*", ";", "[0:1e12]", "R[0:-5]", "Rl[0:3][0:3]",
            "[0.5:3.5]", "{1/0}", "{x}", "200kPa", "250 mL", "mL", "p(", "X1.pclose", "\t",
            ".subckt", ".ends", ".param", ".include", ".step param R 1 1e9 1", ".tran 1e-9 1e9",
-           "\u00e9", "\ufeff", "\x00", "0x10", "1_000", "١٢", "9" * 400]
+           "\u00e9", "\ufeff", "\x00", "0x10", "1_000", "١٢", "9" * 400, "PULSE(1 2)",
+           "(1 2)", "k=v", "p(tank)", '"text"', "VALVE(axi)", "a=b=c", "x" * 3000,
+           "{" + "x" * 3000 + "}", "R=(1)"]
 HOSTILE_LINES = ['.include "/etc/passwd"', '.include "../../../../../../etc/hostname"',
                  '.include "/proc/self/environ"', '.include "/dev/zero"', '.include "."',
                  '.include "' + "a" * 5000 + '"', '.lib "/etc/passwd"', ".include ~/.bashrc"]

@@ -88,8 +88,8 @@ def evaluate(text: str, scope: Scope, span: SourceSpan, column: int | None = Non
         if col is None or col < 1 or (tok is not None and tok.type == "$END"):
             col = len(text) + 1
         what = "end of expression" if tok is not None and tok.type == "$END" else \
-            f"{tok.value!r}" if tok is not None else repr(text[col - 1:col] or "end")
-        raise NetlistError(f"syntax error in expression {{{text}}}: unexpected {what}",
+            f"{_cut(tok.value)!r}" if tok is not None else repr(text[col - 1:col] or "end")
+        raise NetlistError(f"syntax error in expression {{{_cut(text)}}}: unexpected {what}",
                            span=_shift(span, col, base)) from None
     if not math.isfinite(value):
         raise NetlistError(f"expression gives {value} (a result or a step overflows)",
@@ -150,7 +150,7 @@ class _Evaluator:
 
             known = sorted(self.scope.names() | set(CONSTANTS))
             close = difflib.get_close_matches(name, known, n=1)
-            raise NetlistError(f"undefined parameter {name!r} in expression", span=span,
+            raise NetlistError(f"undefined parameter {_cut(name)!r} in expression", span=span,
                                hint=f"did you mean {close[0]!r}?" if close else
                                "define it with .param NAME=value")
         return value
@@ -163,7 +163,7 @@ class _Evaluator:
             import difflib
 
             close = difflib.get_close_matches(name.lower(), FUNCTIONS, n=1)
-            raise NetlistError(f"unknown function {name!r}", span=span,
+            raise NetlistError(f"unknown function {_cut(name)!r}", span=span,
                                hint=f"did you mean {close[0]!r}?" if close else
                                "known: " + ", ".join(sorted(FUNCTIONS)))
         args = [self.eval(a) for a in node.children[1:]]
@@ -221,6 +221,11 @@ class _Evaluator:
     def r_cond(self, node):
         c, a, b = node.children
         return self.eval(a) if self.eval(c) else self.eval(b)
+
+
+def _cut(text: str, width: int = 60) -> str:
+    """``text`` for a message: a long one is cut (the caret display shows the line)."""
+    return text if len(text) <= width else text[:width - 1] + "…"
 
 
 def op_column(op, node) -> int:

@@ -176,7 +176,8 @@ def parse_text(text: str, name: str = "<netlist>", path: Path | None = None, *,
             elif tok.type == "RPAR":
                 msg, hint = "unexpected ')'", "parentheses are not balanced"
             else:
-                msg, hint = f"unexpected {tok.value!r}", None
+                value = tok.value if len(tok.value) <= 60 else tok.value[:59] + "…"
+                msg, hint = f"unexpected {value!r}", None
         elif isinstance(err, UnexpectedCharacters):
             ch = lines[line - 1][column - 1] if line <= len(lines) and column <= len(lines[line - 1]) else "?"
             msg = f"unexpected character {ch!r}"

@@ -85,3 +85,16 @@ def test_limits_are_changed_through_the_api_and_the_cli(tmp_path, capsys):
     assert "unknown limit 'max_aray_size'" in capsys.readouterr().err
     assert main(["check", str(path), "--limit", "max_array_size=-1"]) == 2
     assert "must be a whole number >= 1" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("line", ["R2 a atm {" + "x" * 50_000 + "}",
+                                  "R2 a atm {1 + " + "x" * 50_000 + " 2}",
+                                  "R2 a atm 1 " + "y" * 50_000,
+                                  "R2 a atm 1 (" + "z" * 50_000],
+                         ids=["undefined", "syntax", "extra value", "unclosed"])
+def test_no_message_quotes_more_than_a_window_of_the_line(line, capsys, tmp_path):
+    path = tmp_path / "w.pn"
+    path.write_text(BASE + line + "\n")
+    assert main(["check", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert ":4:" in err and len(err) < 1200, err[:2000]
