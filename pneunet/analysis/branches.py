@@ -28,6 +28,7 @@ import numpy as np
 
 from ..errors import PneunetError
 from ..laws import Scalar, valve_conductance
+from ..reprs import Summarized
 from ..valve_params import ValveParams
 
 
@@ -68,8 +69,8 @@ class Equilibrium:
         return {"p_c": self.p_c, "mdot": self.mdot, "stable": self.stable}
 
 
-@dataclass(frozen=True)
-class Branches:
+@dataclass(frozen=True, repr=False)
+class Branches(Summarized):
     """Result of :func:`stationary_branches`.
 
     ``p_c``, ``mdot``: the open curve in continuation order (from the closure point);
@@ -90,6 +91,18 @@ class Branches:
     p_c_max: float
     steps: int = 0
     extras: dict = field(default_factory=dict)
+
+    def _summary(self):
+        s = self.spec
+        rows = [("turning points", ", ".join(f"p_c {tp.p_c:.4g} kPa"
+                                             for tp in self.turning_points) or "none"),
+                ("equilibria", ", ".join(f"{e.p_c:.4g} kPa "
+                                         f"({'stable' if e.stable else 'unstable'})"
+                                         for e in self.equilibria) or "none"),
+                ("predicted cycle", f"p_c {self.p_c_min:.4g}–{self.p_c_max:.4g} kPa"
+                 if self.regime == "oscillation" else "none")]
+        return (f"R_out={s.Rout:g}, R_vent={s.Rvent:g}: {self.regime}", rows,
+                ".p_c, .mdot (the curve), .as_dict(), plot_branches(b)")
 
     def as_dict(self) -> dict:
         s = self.spec

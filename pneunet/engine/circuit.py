@@ -41,6 +41,10 @@ class Circuit:
         self.elements: dict[str, ElementSpec] = {}
         self.initial: dict[str, float] = {}
 
+    def __repr__(self) -> str:
+        return (f"<Circuit {self.title!r}: {len(self.nodes)} nodes, {len(self.elements)} "
+                "elements; .summary(), .tran(t_stop), .op()>")
+
     # -- building ---------------------------------------------------------------
     def add(self, kind: str, name: str, nodes, *, span: SourceSpan | None = None,
             **params) -> ElementSpec:

@@ -19,6 +19,7 @@ import pandas as pd
 
 from ..csvdata import BENCH_MAX_ROWS, column_unit, missing_column, open_csv
 from ..errors import DataError, ParameterError
+from ..reprs import Summarized
 
 PRESSURES = ("p_in_kPa", "p_out_kPa", "p_ctrl_kPa")
 REQUIRED = ("time_s",) + PRESSURES + ("mdot_mg_s",)
@@ -28,8 +29,8 @@ OPTIONAL = ("sweep", "valve", "h_seat_mm", "T_K")
 GAUGE_SUSPECT_KPA = 30.0
 
 
-@dataclass
-class Measurements:
+@dataclass(repr=False)
+class Measurements(Summarized):
     """Checked measurements in canonical units.
 
     ``frame``: canonical columns (``time_s, p_in_kPa, p_out_kPa, p_ctrl_kPa,
@@ -47,6 +48,11 @@ class Measurements:
 
     def __len__(self) -> int:
         return len(self.frame)
+
+    def _summary(self):
+        rows = [("points", str(len(self.frame))), ("excluded", str(len(self.excluded))),
+                ("columns", ", ".join(c for c in self.frame.columns if c not in ("row", "line")))]
+        return self.source, rows, ".frame, .excluded, .summary()"
 
     def summary(self) -> str:
         lines = [f"{self.source}: {len(self.frame)} points used, {len(self.excluded)} excluded"]

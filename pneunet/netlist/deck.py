@@ -6,6 +6,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from ..errors import SourceSpan
+from ..reprs import Summarized
 
 
 @dataclass
@@ -78,8 +79,8 @@ class Measure:
     text: str = ""
 
 
-@dataclass
-class Deck:
+@dataclass(repr=False)
+class Deck(Summarized):
     """A netlist after elaboration.
 
     ``circuit`` is the (flattened) :class:`~pneunet.engine.circuit.Circuit`; ``analyses``
@@ -99,6 +100,14 @@ class Deck:
     params: dict = field(default_factory=dict)
     overrides: dict = field(default_factory=dict)
     source: Any = None  # the parsed statements, to rebuild variants
+
+    def _summary(self):
+        rows = [("elements", str(len(self.circuit.elements))),
+                ("analyses", ", ".join(f".{a.kind}" for a in self.analyses) or "none"),
+                ("measures", str(len(self.measures)))]
+        if self.steps:
+            rows.append(("step points", str(len(self.step_points()))))
+        return repr(self.file), rows, ".circuit, .analyses, .measures, .variant(point)"
 
     def step_points(self) -> list[dict]:
         """All combinations of the ``.step`` values ([{}] without ``.step``)."""

@@ -32,3 +32,29 @@ def test_solution_plot_draws_coinciding_flows_once_with_the_legend_outside():
     legend = flows.get_legend()
     assert legend.get_bbox_to_anchor().x0 > flows.get_window_extent().x1  # right of the data
     assert any("drawn once" in text.get_text() for text in flows.texts)
+
+
+def test_circuit_deck_branches_and_measurements_reprs_are_short():
+    from pathlib import Path
+
+    from pneunet.analysis.branches import stationary_branches
+    from pneunet.identify import load_measurements
+    from pneunet.netlist import parse_file
+
+    root = Path(__file__).parents[2]
+    deck = parse_file(root / "netlists" / "oscillator.pn")
+    assert_short(repr(deck), "elements 5", "analyses .tran", ".circuit")
+    assert_short(repr(deck.circuit), "4 nodes, 5 elements", ".tran(t_stop)")
+    assert_short(repr(stationary_branches()), "oscillation", "186.4 kPa (unstable)",
+                 "predicted cycle p_c 183.5–319.8 kPa")
+    assert_short(repr(load_measurements(root / "examples" / "data" / "bench_axi.csv")),
+                 "points 4410", "excluded 0", ".frame")
+
+
+def test_sweep_result_repr_counts_points_not_the_table():
+    from pneunet.analysis.circuits import oscillator as build
+    from pneunet.analysis.sweep import OscillationMeasure, grid, lin, run_sweep
+
+    result = run_sweep(build, grid(lin("Rout", 0.0, 1.0, 2)), OscillationMeasure(t_stop=3.0),
+                       workers=1, progress=False)
+    assert_short(repr(result), "points 2 (2 computed, 0 reused)", "failed 0", ".table")
