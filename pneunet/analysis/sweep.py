@@ -36,6 +36,7 @@ from typing import Any, Callable, Iterable, Sequence
 import numpy as np
 
 from ..errors import ParameterError, PneunetError
+from ..reprs import Summarized
 from .store import append, open_store, read_store
 
 
@@ -341,8 +342,8 @@ def evaluate_point(build: Callable, analysis: Callable, point: dict, keep_trace:
     return record
 
 
-@dataclass
-class SweepResult:
+@dataclass(repr=False)
+class SweepResult(Summarized):
     """A sweep's table (one row per point, input order), traces and run statistics."""
 
     table: Any
@@ -353,6 +354,13 @@ class SweepResult:
     wall_time_s: float = 0.0
     workers: int = 1
     with_solver_messages: int = 0  # points whose simulations drew integrator messages
+
+    def _summary(self):
+        rows = [("points", f"{len(self.table)} ({self.computed} computed, {self.reused} "
+                           "reused)"), ("failed", str(self.failed)),
+                ("with solver messages", str(self.with_solver_messages)),
+                ("workers", str(self.workers)), ("wall time", f"{self.wall_time_s:.3g} s")]
+        return "", rows, ".table (one row per point), .traces, .to_csv(path)"
 
     def to_csv(self, path):
         path = Path(path)
