@@ -69,7 +69,7 @@ def _rising_crossings(t, y, level):
     return np.array(out)
 
 
-def analyze_oscillation(t, y, *, rtol: float = 1e-3, min_amplitude: float = 1.0,
+def analyze_oscillation(t, y=None, *, rtol: float = 1e-3, min_amplitude: float = 1.0,
                         cycles: int = 3) -> Oscillation:
     """Classify the signal ``y(t)`` and measure its oscillation.
 
@@ -79,6 +79,11 @@ def analyze_oscillation(t, y, *, rtol: float = 1e-3, min_amplitude: float = 1.0,
     change of the period and amplitude between the last two cycles below which the
     cycle counts as converged.
     """
+    if y is None or hasattr(t, "signals"):
+        raise PneunetError("analyze_oscillation takes a time array and a signal array, "
+                           f"got {type(t).__name__}" + (" and no signal" if y is None else ""),
+                           hint="analyze_oscillation(sol.t, sol.pressure('tank')); to simulate "
+                                "a circuit until it oscillates steadily: oscillator_period")
     t = np.asarray(t, dtype=float)
     y = np.asarray(y, dtype=float)
     if t.ndim != 1 or t.shape != y.shape or len(t) < 3:
@@ -161,6 +166,11 @@ def oscillator_period(circuit, node: str = "tank", *, rtol: float = 1e-4, t_init
     twice that of the final run.  Raises :class:`PneunetError` when ``t_max`` is reached
     without convergence (the last analysis is attached as ``err.partial``).
     """
+    if not callable(getattr(circuit, "tran", None)):
+        raise PneunetError(f"oscillator_period takes a Circuit to simulate, got "
+                           f"{type(circuit).__name__}",
+                           hint="for a Solution you have: analyze_oscillation(sol.t, "
+                                "sol.pressure(node))")
     t_stop, runs = t_initial, 0
     while True:
         sol = circuit.tran(t_stop, progress=progress)

@@ -387,6 +387,11 @@ def run_sweep(build: Callable, points: Sequence[dict], analysis: Callable | None
     import pandas as pd
 
     require_builder(build, "run_sweep")
+    if isinstance(points, (dict, Axis, str)) or not all(isinstance(p, dict) for p in points):
+        raise PneunetError(f"run_sweep takes a list of points (dicts {{name: value}}), got "
+                           f"{type(points).__name__}",
+                           hint="grid(lin('Rout', 0.2, 3, 10)) makes one from axes; "
+                                "[{'Rout': 1.0}] is a single point")
     analysis = analysis or OscillationMeasure()
     points = [{k: _plain(v) for k, v in p.items()} for p in points]
     keys = [point_key(p) for p in points]

@@ -182,13 +182,19 @@ class Circuit:
 
     # -- analyses -------------------------------------------------------------------
     def tran(self, t_stop: float, **kwargs):
-        """Transient analysis; see :func:`pneunet.engine.simulate.transient`."""
+        """Transient analysis; see :func:`pneunet.engine.simulate.transient`.  Times are
+        seconds or strings with a unit (``"30s"``, ``t_step="10ms"``)."""
         from .simulate import transient
 
-        return transient(self, t_stop, **kwargs)
+        for key in ("t_step", "t_start"):
+            if kwargs.get(key) is not None:
+                kwargs[key] = self._number(kwargs[key], "time", key, None)
+        return transient(self, self._number(t_stop, "time", "t_stop", None), **kwargs)
 
     def op(self, **kwargs):
         """Operating point; see :func:`pneunet.engine.simulate.operating_point`."""
         from .simulate import operating_point
 
+        if "t" in kwargs:
+            kwargs["t"] = self._number(kwargs["t"], "time", "t", None)
         return operating_point(self, **kwargs)

@@ -37,3 +37,41 @@ def test_truth_table_repr_names_inputs_outputs_and_margin():
     text = repr(tt)
     assert text.startswith("<TruthTable: inputs A, outputs out1, rows 2")
     assert "as expected 2 of 2" in text and "smallest margin" in text
+
+
+def test_oscillation_calls_given_the_wrong_object_say_which_call_fits():
+    from pneunet.analysis.oscillation import analyze_oscillation, oscillator_period
+    from pneunet.paper_circuits import oscillator
+
+    sol = oscillator().tran("2s", t_step="50ms")  # times may carry units
+    assert sol.t[-1] == 2.0 and sol.t[1] == pytest.approx(0.05)
+    with pytest.raises(PneunetError, match="takes a Circuit to simulate, got Solution") as e:
+        oscillator_period(sol)
+    assert "analyze_oscillation(sol.t" in e.value.hint
+    with pytest.raises(PneunetError, match="takes a time array and a signal array"):
+        analyze_oscillation(sol)
+
+
+@pytest.mark.parametrize("points", [{"Rout": 1.0}, "Rout=1"], ids=["dict", "str"])
+def test_run_sweep_wants_a_list_of_points(points):
+    from pneunet.analysis.circuits import oscillator as build
+
+    with pytest.raises(PneunetError, match="takes a list of points") as e:
+        run_sweep(build, points, workers=1, progress=False)
+    assert "grid(lin(" in e.value.hint
+
+
+def test_run_sweep_given_an_axis_says_to_wrap_it_in_a_grid():
+    from pneunet.analysis.circuits import oscillator as build
+    from pneunet.analysis.sweep import lin
+
+    with pytest.raises(PneunetError, match="got Axis"):
+        run_sweep(build, lin("Rout", 0.0, 1.0, 2), workers=1, progress=False)
+
+
+def test_a_time_that_is_no_time_is_a_parameter_error():
+    from pneunet.errors import ParameterError
+    from pneunet.paper_circuits import oscillator
+
+    with pytest.raises(ParameterError, match="t_stop"):
+        oscillator().tran("30kPa")
