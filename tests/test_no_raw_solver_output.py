@@ -65,3 +65,10 @@ def test_sweep_json_is_only_json_on_stdout(tmp_path, capfd):
     summary = json.loads(out)
     assert summary["points"] == 2 and summary["failed"] == 0
     assert [row["solver_messages"] for row in summary["rows"]] == [0, 0]
+
+
+def test_branches_json_is_only_json_and_counts_the_solver_messages(capfd):
+    code = main(["branches", "--simulate", "8", "--json"])
+    out, err = capfd.readouterr()
+    assert code == 0 and not RAW.search(out + err)
+    assert json.loads(out)["simulated"]["solver_messages"] == {"count": 0}

@@ -58,6 +58,7 @@ def main(args) -> int:
 
         osc = analyze_oscillation(sol.t, sol.pressure(node))
         out["simulated"] = {k: v for k, v in osc.as_dict().items()}
+        out["simulated"]["solver_messages"] = sol.stats.get("solver_diagnostics", {"count": 0})
         flow_key = next((k for k in sol.signals if k.startswith("mdot_") and k[5:] in circuit.elements
                          and circuit.elements[k[5:]].kind == "valve"), None)
         if flow_key:
