@@ -127,10 +127,21 @@ class CsvFile:
         """DataFrames of consecutive data lines, checked (fields, numbers)."""
         import numpy as np
 
-        import pandas as pd
+        line_base, row = 0, 0
+        for text in self._texts():
+            body, numbers = self._data_lines(text, line_base)
+            line_base += text.count("\n")
+            if not len(numbers):
+                continue
+            frame = _parse(body, numbers, self.columns, numeric, self.source)
+            frame.insert(0, "row", np.arange(row + 1, row + len(frame) + 1))
+            frame.insert(1, "line", numbers)
+            row += len(frame)
+            yield frame
 
-        n_fields = len(self.columns)
-        row, line_base, seen_header, tail = 0, 0, False, b""
+    def _texts(self):
+        """The file after its byte-order mark as decoded blocks of whole lines."""
+        tail, line_base = b"", 0
         with self.path.open("rb") as fh:
             fh.read(self._skip)
             while True:
@@ -138,43 +149,65 @@ class CsvFile:
                 data = tail + block
                 if block:
                     cut = data.rfind(b"\n") + 1
-                    if cut == 0:
-                        tail = data
-                        continue
                     data, tail = data[:cut], data[cut:]
+                    if not data:
+                        continue
                 elif not data:
                     return
                 else:
-                    tail = b""
-                text = _decode(data, self.source, line_base + 1)
-                lines = text.split("\n")
-                if lines and lines[-1] == "":
-                    lines.pop()
-                keep = [i for i, s in enumerate(lines)
-                        if s.strip() and not s.lstrip().startswith("#")]
-                numbers = np.asarray(keep, dtype=np.int64) + line_base + 1
-                line_base += len(lines)
-                if not seen_header:
-                    numbers = numbers[1:]
-                    keep = keep[1:]
-                    seen_header = True
-                if not keep:
-                    if not block:
-                        return
-                    continue
-                body = [lines[i].rstrip("\r") for i in keep]
-                _check_fields(body, numbers, n_fields, self.source)
-                frame = pd.read_csv(io.StringIO("\n".join(body)), header=None,
-                                    names=self.columns, skipinitialspace=True,
-                                    dtype={c: str for c in numeric})
-                for c in numeric:
-                    frame[c] = _numbers(frame[c], c, numbers, self.source)
-                frame.insert(0, "row", np.arange(row + 1, row + len(frame) + 1))
-                frame.insert(1, "line", numbers)
-                row += len(frame)
-                yield frame
+                    data, tail = data + b"\n", b""  # a last line without its newline
+                yield _decode(data, self.source, line_base + 1)
+                line_base += data.count(b"\n")
                 if not block:
                     return
+
+    def _data_lines(self, text: str, line_base: int):
+        """(data text, file line numbers) of a block: header, comment and blank lines
+        left out (the common block of plain data lines is passed on as it is)."""
+        import numpy as np
+
+        start = 0
+        if line_base < self.header_line:  # the block holding the header
+            for _ in range(self.header_line - line_base):
+                start = text.index("\n", start) + 1
+        body = text[start:]
+        first = line_base + text.count("\n", 0, start) + 1
+        if "#" not in body and not _BLANK.search("\n" + body):
+            return body, np.arange(first, first + body.count("\n"), dtype=np.int64)
+        lines = body.split("\n")[:-1]
+        keep = [i for i, s in enumerate(lines) if s.strip() and not s.lstrip().startswith("#")]
+        return ("\n".join(lines[i] for i in keep) + "\n",
+                np.asarray(keep, dtype=np.int64) + first)
+
+
+#: an empty or blank line (the text is prefixed with a newline before searching)
+_BLANK = re.compile(r"\n[ \t\r]*(\n|$)")
+
+
+def _parse(body: str, numbers, columns, numeric, source):
+    """Data lines as a DataFrame, ``numeric`` columns as float; DataError at the first
+    line with a wrong number of fields or text in a number column."""
+    import pandas as pd
+
+    n_fields = len(columns)
+    if body.count(",") != len(numbers) * (n_fields - 1):
+        _check_fields(body.split("\n")[:-1], numbers, n_fields, source)
+    try:
+        return pd.read_csv(io.StringIO(body), header=None, names=columns,
+                           skipinitialspace=True, dtype={c: "float64" for c in numeric})
+    except pd.errors.ParserError as err:  # quoted commas, or a long row beside a short one
+        m = re.search(r"in line (\d+), saw (\d+)", str(err))
+        line = numbers[int(m.group(1)) - 1] if m else numbers[0]
+        raise DataError(f"{m.group(2) + ' fields, the header has ' + str(n_fields) if m else err}",
+                        where=_at(source, line),
+                        hint="every row needs one value per column (a ragged or cut row; fix "
+                             "or delete it)") from None
+    except (ValueError, TypeError):
+        frame = pd.read_csv(io.StringIO(body), header=None, names=columns,
+                            skipinitialspace=True, dtype={c: str for c in numeric})
+        for c in numeric:
+            frame[c] = _numbers(frame[c], c, numbers, source)
+        return frame
 
 
 def open_csv(path) -> CsvFile:

@@ -12,7 +12,6 @@ are dropped and listed in :attr:`Measurements.excluded` — never silently.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
