@@ -14,6 +14,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from .deck import DC, Deck, Measure, Op, Signal, Step, Tran
+from .limits import Limits
 
 
 def parse_netlist(text: str, name: str = "<netlist>", overrides: dict | None = None, *,
@@ -41,7 +42,7 @@ def parse_file(path, overrides: dict | None = None, *, limits=None, include_path
 
 
 def _limits(limits):
-    from .limits import DEFAULT, Limits
+    from .limits import DEFAULT
 
     return limits if isinstance(limits, Limits) else DEFAULT.replace(limits or {})
 
@@ -63,4 +64,4 @@ def print_circuit(circuit, **kw) -> str:
 
 
 __all__ = ["parse_netlist", "parse_file", "print_circuit", "Deck", "Tran", "Op", "DC", "Step",
-           "Measure", "Signal"]
+           "Measure", "Signal", "Limits"]

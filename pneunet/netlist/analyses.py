@@ -62,6 +62,10 @@ class AnalysisStatements:
         if items and isinstance(items[0], Word) and items[0].text.lower() == "list":
             if len(items) < 2:
                 raise _err("list needs at least one value", items[0])
+            if len(items) - 1 > self.limits.max_sweep_points:
+                raise _err(f"a list of {len(items) - 1} values "
+                           f"({self.limits.exceeded('max_sweep_points')})", items[0],
+                           self.limits.hint("max_sweep_points"))
             return [conv(w) for w in items[1:]]
         if items and isinstance(items[0], Word) and items[0].text.lower() == "lin":
             items = items[1:]

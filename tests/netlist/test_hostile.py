@@ -98,3 +98,14 @@ def test_no_message_quotes_more_than_a_window_of_the_line(line, capsys, tmp_path
     assert main(["check", str(path)]) == 2
     err = capsys.readouterr().err
     assert ":4:" in err and len(err) < 1200, err[:2000]
+
+
+def test_sweep_lists_count_against_max_sweep_points():
+    from pneunet.netlist import Limits
+
+    text = ".param a=1\nP1 x 200kPa\nR1 x atm {a}\nV1 x 1mL\n.dc P1 list 100 200 300\n"
+    assert len(parse_netlist(text).analyses[0].values) == 3
+    with pytest.raises(NetlistError) as info:
+        parse_netlist(text, limits=Limits(max_sweep_points=2))
+    assert (info.value.span.line, info.value.span.column) == (5, 8)
+    assert "a list of 3 values (limit max_sweep_points = 2)" in info.value.message
