@@ -43,13 +43,14 @@ class IncludePolicy:
         name = item.text
         rule = "includes must stay under " + " or ".join(str(r) for r in self.roots)
         if len(name) > MAX_NAME or any(len(part) > 255 for part in name.split("/")):
-            raise NetlistError(f"include name of {len(name)} characters is too long", span=item.span,
+            raise NetlistError(f"include name of {len(name)} characters is too long",
+                               span=item.span,
                                hint=f"at most {MAX_NAME} characters, 255 per folder name")
         if "\0" in name or not name.strip():
-            raise NetlistError(f"{name!r} is not a file name", span=item.span)
+            raise NetlistError(f"{_short(name)!r} is not a file name", span=item.span)
         if os.path.isabs(name) or name.startswith("~"):
-            raise NetlistError(f"absolute include path {_short(name)!r} is not allowed", span=item.span,
-                               hint="write it relative to the including file, or add its folder "
+            raise NetlistError(f"absolute include path {_short(name)!r} is not allowed",
+                               span=item.span, hint="write it relative to the including file, or add its folder "
                                     "with --include-path or PNEUNET_PATH")
         refused = None
         for folder in (base, *self.roots[1:]):
@@ -62,7 +63,8 @@ class IncludePolicy:
             except OSError:
                 continue
             if stat.S_ISDIR(mode):
-                raise NetlistError(f"included {_short(name)!r} is a folder, not a file", span=item.span)
+                raise NetlistError(f"included {_short(name)!r} is a folder, not a file",
+                                   span=item.span)
             if not stat.S_ISREG(mode):
                 raise NetlistError(f"included {_short(name)!r} is not a regular file (a device, "
                                    "pipe or socket)", span=item.span)

@@ -5,7 +5,7 @@ from pathlib import Path
 import pytest
 
 from pneunet.cli import main
-from pneunet.errors import NetlistError, PneunetError
+from pneunet.errors import NetlistError
 from pneunet.netlist import parse_file
 
 CORPUS = sorted((Path(__file__).parent / "malformed").glob("*.pn"))
