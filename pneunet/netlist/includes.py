@@ -50,8 +50,9 @@ class IncludePolicy:
             raise NetlistError(f"{_short(name)!r} is not a file name", span=item.span)
         if os.path.isabs(name) or name.startswith("~"):
             raise NetlistError(f"absolute include path {_short(name)!r} is not allowed",
-                               span=item.span, hint="write it relative to the including file, or add its folder "
-                                    "with --include-path or PNEUNET_PATH")
+                               span=item.span,
+                               hint="write it relative to the including file, or add its "
+                                    "folder with --include-path or PNEUNET_PATH")
         refused = None
         for folder in (base, *self.roots[1:]):
             path = Path(os.path.realpath(folder / name))
