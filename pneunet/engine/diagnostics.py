@@ -101,7 +101,9 @@ class Diagnostics:
     """The integrator's messages during one simulation.
 
     ``recovered`` is False when the simulation stopped (the result ends early);
-    ``where`` names the node the failure points at, when known.
+    ``where`` names the node the first message points at: for a failure the node whose
+    pressure changes fastest where it stopped, else the fastest one around the time
+    of the first message.
     """
 
     messages: tuple = ()
@@ -141,7 +143,7 @@ class Diagnostics:
             meaning = MEANINGS.get(_code(kind, k["text"]), k["text"].rstrip("."))
             verdict = ("the integrator recovered: the result passed its error test" if
                        self.recovered else "the simulation stopped: the result ends there")
-            where = f" near {self.where}" if self.where and not self.recovered else ""
+            where = f" near {self.where}" if self.where else ""
             times = "" if k["count"] == 1 else f" ({k['count']} times)"
             lines.append(f"IDA {kind}{times}{when}{where}: {meaning}; {verdict}")
         return lines
@@ -276,7 +278,8 @@ def captured(solve):
                 finally:
                     _local.capture = None
         found = Diagnostics(tuple(capture.messages), failure is None,
-                            None if failure is None else failure.where)
+                            failure.where if failure is not None else
+                            _fastest_node(result, capture.messages))
         if found.messages:
             announce(found)
         for listener in _listeners:
@@ -291,6 +294,23 @@ def captured(solve):
 
 
 _listeners: list[list] = []
+
+
+def _fastest_node(solution, messages) -> str | None:
+    """'node X': the unknown whose pressure changes fastest (kPa/s) around the time of
+    the first message that gives one; None without such a message."""
+    import numpy as np
+
+    times = [m.time for m in messages if m.time is not None]
+    t = solution.t
+    if not times or t.size < 3:
+        return None
+    j = int(np.searchsorted(t, times[0]))
+    lo, hi = max(j - 2, 0), min(j + 2, t.size - 1)
+    span = max(t[hi] - t[lo], 1e-12)
+    rates = {k: abs(solution[k][hi] - solution[k][lo]) / span for k in solution.signals
+             if k.startswith("p_") and solution.units[k] == "kPa"}
+    return f"node {max(rates, key=rates.get)[2:]}" if rates else None
 
 
 def summarize(heard: list[Diagnostics]) -> dict:
