@@ -14,8 +14,10 @@ from pneunet.paper_circuits import oscillator
 RAW = ("[WARNING]", "[rank 0]", "Error: -", "ida_ls.c", "feedstock")
 
 WARNING_LINE = ("[WARNING][rank 0][/home/conda/feedstock_root/build/sundials/src/ida/"
-                "ida_ls.c:1687][idaLsPerf] Warning: at t = 2.0025, poor iterative algorithm performance.\n")
-HANDLER_LINE = "\n[IDAHandleFailure, Error: -4] At t = 1.5, corrector convergence failed repeatedly\n\n"
+                "ida_ls.c:1687][idaLsPerf] Warning: at t = 2.0025, poor iterative algorithm "
+                "performance.\n")
+HANDLER_LINE = ("\n[IDAHandleFailure, Error: -4] At t = 1.5, corrector convergence failed "
+                "repeatedly\n\n")
 
 
 def assert_no_raw_sundials(text):
