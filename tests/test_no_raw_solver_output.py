@@ -72,3 +72,22 @@ def test_branches_json_is_only_json_and_counts_the_solver_messages(capfd):
     out, err = capfd.readouterr()
     assert code == 0 and not RAW.search(out + err)
     assert json.loads(out)["simulated"]["solver_messages"] == {"count": 0}
+
+
+@pytest.mark.parametrize("command", ["run", "sweep"])
+def test_q_silences_the_solver_warnings_of_every_command(tmp_path, capfd, monkeypatch, command):
+    from pneunet.engine import diagnostics
+
+    monkeypatch.setattr(diagnostics, "_announced", set())  # shown once per process
+    shipped = (NETLISTS / "oscillator.pn").read_text()
+    netlist = tmp_path / "osc.pn"  # its fold indicator almost off: IDA's corrector fails
+    netlist.write_text(shipped.replace(".options ambient=96kPa",
+                                       ".options ambient=96kPa fold_threshold=1e-8")
+                       .replace(".tran 10ms 30s", ".tran 10ms 6s").replace("FROM=10s", "FROM=1s"))
+    args = {"run": ["run", str(netlist), "-o", str(tmp_path / "out")],
+            "sweep": ["sweep", str(netlist), "--param", "Rvent=list:3", "--workers", "1",
+                      "--out", str(tmp_path / "s.csv")]}[command]
+    main(args)
+    assert "warning: IDA" in capfd.readouterr().err
+    main([*args, "-q"] if command == "run" else [*args, "--fresh", "-q"])
+    assert "warning" not in capfd.readouterr().err

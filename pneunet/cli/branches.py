@@ -26,6 +26,8 @@ def register(subparsers) -> None:
     p.add_argument("--plot", metavar="PNG", default=None, help="write the Fig. 11 style plot")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--quiet", "-q", action="store_true",
+                   help="no warnings or progress on stderr (errors only)")
     netlist_args.add(p)
     p.set_defaults(func=main)
 
@@ -53,7 +55,8 @@ def main(args) -> int:
             circuit = oscillator({"pH": spec.pH, "pL": spec.pL, "Rout": spec.Rout,
                                   "Rvent": spec.Rvent, "valve": args.valve})
         node = args.node or "tank"
-        sol = circuit.tran(args.simulate, progress=not (args.no_progress or args.json))
+        sol = circuit.tran(args.simulate, progress=not (args.no_progress or args.json
+                                                       or args.quiet))
         from ..analysis.oscillation import analyze_oscillation
 
         osc = analyze_oscillation(sol.t, sol.pressure(node))

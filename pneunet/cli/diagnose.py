@@ -35,6 +35,8 @@ def register(subparsers):
                    help=f"read at most N data rows; a longer file is thinned evenly with a "
                         f"notice (default {BENCH_MAX_ROWS})")
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+    p.add_argument("--quiet", "-q", action="store_true",
+                   help="no warnings or progress on stderr (errors only)")
     p.set_defaults(func=run)
 
 
@@ -69,7 +71,8 @@ def run(args) -> int:
     for spec in args.plugin:
         _load_plugin(spec)
     diag = diagnose(data, effects=args.effects, n_splits=args.folds,
-                    max_effects=args.max_effects, progress=not (args.no_progress or args.json))
+                    max_effects=args.max_effects,
+                    progress=not (args.no_progress or args.json or args.quiet))
     if args.plots:
         diag.plots(args.plots)
     if args.model_out:

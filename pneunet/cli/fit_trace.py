@@ -60,6 +60,8 @@ def register(subparsers) -> None:
                    help=f"read at most N samples; a longer recording is thinned evenly with a "
                         f"notice (default {TRACE_MAX_ROWS})")
     p.add_argument("--no-progress", action="store_true", help="no progress messages on stderr")
+    p.add_argument("--quiet", "-q", action="store_true",
+                   help="no warnings or progress on stderr (errors only)")
     netlist_args.add(p)
     p.set_defaults(func=main)
 
@@ -136,7 +138,7 @@ def main(args) -> int:
     else:
         from ..analysis.circuits import oscillator as build
     _load_effects(args.effects_module)
-    quiet = args.no_progress
+    quiet = args.no_progress or args.quiet
 
     def say(msg):
         if not quiet:

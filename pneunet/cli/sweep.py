@@ -56,6 +56,8 @@ def register(subparsers) -> None:
                    help="regime map (two axes) or measurement vs parameter (one axis)")
     p.add_argument("--json", action="store_true", help="print a JSON summary with all rows")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--quiet", "-q", action="store_true",
+                   help="no warnings or progress on stderr (errors only)")
     netlist_args.add(p)
     p.set_defaults(func=main)
 
@@ -133,7 +135,7 @@ def main(args) -> int:
             executor = Client(cluster)
         else:
             executor = Client(args.dask)
-    progress = not (args.no_progress or args.json)
+    progress = not (args.no_progress or args.json or args.quiet)
     try:
         result = S.run_sweep(build, points, analysis, executor=executor, workers=args.workers,
                              store=store, progress=progress, retry_failed=args.retry_failed)
