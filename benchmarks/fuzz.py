@@ -1,18 +1,21 @@
 """Mutation fuzzing of pneunet's input readers (issue 17).
 
-    python benchmarks/fuzz.py --minutes 30 [--target netlist|all] [--seed 0] [--save DIR]
+    python benchmarks/fuzz.py --minutes 30 [--target netlist|csv|all] [--seed 0] [--save DIR]
 
-Each case takes a valid input of a target (the shipped netlists for ``netlist``), applies
-one to three random mutations (delete, duplicate or swap tokens and lines, random bytes,
-huge and tiny numbers, deep nesting, hostile includes, truncation) and reads the result
-the way the command line does.  Every case must end as ``ok`` (read and validated) or
+Each case takes a valid input of a target (the shipped netlists for ``netlist``, the
+sample data files of examples/data for ``csv``), applies one to three random mutations
+(netlists: delete, duplicate or swap tokens and lines, random bytes, huge and tiny
+numbers, deep nesting, hostile includes, truncation; CSV: delete, duplicate, swap or
+replace cells and rows, separators, encodings, random bytes, huge numbers, truncation)
+and reads the result the way the command line does.  Every case must end as ``ok`` (read and validated) or
 ``located`` (a PneunetError naming a place); the counts of ``unlocated`` errors,
 ``crash`` (any other exception), ``hang`` (over --timeout seconds) and ``escape`` (a file
 opened outside the case's folder) must stay zero.  Failing cases are written to --save.
 
 A target is a :class:`Target` in :data:`TARGETS` (``register``): its seed inputs, the
-file suffix, and the function that reads one file.  tests/netlist/test_fuzz.py runs the
-same mutations under hypothesis with a small fixed budget.
+file suffix, the function that reads one file and its mutations.  tests/netlist/test_fuzz.py
+and tests/identify/test_fuzz_csv.py run the same mutations under hypothesis with a small
+fixed budget.
 """
 from __future__ import annotations
 
@@ -41,6 +44,10 @@ class Target:
     seeds: Callable[[], list]
     read: Callable[[Path], None]
     suffix: str
+    mutate: Callable | None = None  # (data, rng, rounds) -> data; default :func:`mutate`
+
+    def mutated(self, data: bytes, rng, rounds: int | None = None) -> bytes:
+        return (self.mutate or mutate)(data, rng, rounds)
 
 
 TARGETS: dict[str, Target] = {}
@@ -192,6 +199,144 @@ def mutate(data: bytes, rng: random.Random, rounds: int | None = None) -> bytes:
     return data
 
 
+# -- the csv target: measured data as fit, diagnose and fit-trace read it ---------------------
+def _csv_seeds() -> list:
+    """The sample bench file and recording, cut to their first rows (fast cases).  Each
+    is read once here: pandas reads the CPU quota under /sys on its first CSV, which is
+    no case's doing."""
+    out = []
+    for name, rows in (("bench_axi.csv", 80), ("oscillator_rec.csv", 120)):
+        lines = (ROOT / "examples" / "data" / name).read_bytes().split(b"\n")
+        out.append(b"\n".join(lines[:3 + rows]) + b"\n")
+    with tempfile.TemporaryDirectory() as tmp:
+        for data in out:
+            (Path(tmp) / "seed.csv").write_bytes(data)
+            try:
+                _read_csv(Path(tmp) / "seed.csv")
+            except Exception:  # noqa: BLE001 - only warming up
+                pass
+    return out
+
+
+def _read_csv(path: Path) -> None:
+    """Read ``path`` as bench data (``fit``, ``diagnose``) and as a recording
+    (``fit-trace``): ok when one reader accepts it and the other fails with a location;
+    else its unlocated error first, or the first error."""
+    from pneunet.errors import PneunetError
+    from pneunet.identify import load_measurements
+    from pneunet.traces.data import read_trace
+
+    errors = []
+    for read in (load_measurements, read_trace):
+        try:
+            read(path, max_rows=1000)
+        except PneunetError as err:
+            errors.append(err)
+    errors.sort(key=lambda e: bool(e.where or e.span))
+    if errors and (len(errors) == 2 or not (errors[0].where or errors[0].span)):
+        raise errors[0]
+
+
+CELLS = ["", "nan", "NaN", "inf", "-inf", "Infinity", "1e308", "-1e308", "1e309", "1e-320",
+         "0", "-5", "abc", "1.2.3", "12,5", '"1"', '"a,b"', "NA", "n/a", "None", "\u00e9",
+         "\u0661\u0662", "9" * 400, " 1", "1 ", "0x10", "1_000", "1e5kPa", "#", "\t", "\x00"]
+HEADERS = ["p_tank_bar", "p_tank_kpa", "p_in_bar", "p_in_kPag", "p_x_mg_s", "mdot_R1_kPa",
+           "time_ms", "t", "", "p_in_kPa", "time_s", "mdot_mg_s", "p_tank", "sweep", "valve"]
+
+
+def _rows(text):
+    lines = text.split("\n")
+    body = [i for i, line in enumerate(lines) if line and not line.startswith("#")]
+    return lines, body or [0]
+
+
+def c_cells(text, rng):
+    """Delete, duplicate, swap or replace a cell (a header cell included)."""
+    lines, body = _rows(text)
+    i = rng.choice(body)
+    cells = lines[i].split(",")
+    k = rng.randrange(len(cells))
+    op = rng.choice(["delete", "duplicate", "swap", "special", "special", "header"])
+    if op == "delete" and len(cells) > 1:
+        del cells[k]
+    elif op == "duplicate":
+        cells.insert(k, cells[k])
+    elif op == "swap":
+        j = rng.choice(body)
+        other = lines[j].split(",")
+        m = rng.randrange(len(other))
+        cells[k], other[m] = other[m], cells[k]
+        if j != i:
+            lines[j] = ",".join(other)
+    elif op == "header":
+        i, cells = body[0], lines[body[0]].split(",")
+        cells[rng.randrange(len(cells))] = rng.choice(HEADERS)
+    else:
+        cells[k] = rng.choice(CELLS)
+    lines[i] = ",".join(cells)
+    return "\n".join(lines)
+
+
+def c_rows(text, rng):
+    """Delete, duplicate or swap data rows, reverse or shuffle them, drop all of them."""
+    lines, body = _rows(text)
+    op = rng.choice(["delete", "duplicate", "swap", "reverse", "shuffle", "empty"])
+    data = body[1:] or body
+    i, j = rng.choice(data), rng.choice(data)
+    if op == "delete":
+        del lines[i]
+    elif op == "duplicate":
+        lines.insert(i, lines[i])
+    elif op == "swap":
+        lines[i], lines[j] = lines[j], lines[i]
+    else:
+        rows = [lines[k] for k in data]
+        rows = ([] if op == "empty" else rows[::-1] if op == "reverse"
+                else rng.sample(rows, len(rows)))
+        lines = [line for k, line in enumerate(lines) if k not in set(data)] + rows
+    return "\n".join(lines)
+
+
+def c_separator(text, rng):
+    """Another separator or decimal mark, CRLF line ends, or blank and comment lines."""
+    op = rng.choice(["semicolon", "tab", "decimal", "crlf", "blank"])
+    if op == "semicolon":
+        return text.replace(",", ";")
+    if op == "tab":
+        return text.replace(",", "\t")
+    if op == "decimal":
+        return text.replace(".", ",")
+    if op == "crlf":
+        return text.replace("\n", "\r\n")
+    lines = text.split("\n")
+    lines.insert(rng.randrange(len(lines) + 1), rng.choice(["", "   ", "# note", ",,,"]))
+    return "\n".join(lines)
+
+
+CSV_MUTATIONS = [c_cells, c_cells, c_rows, c_separator, m_huge_number, m_truncate]
+
+
+def mutate_csv(data: bytes, rng: random.Random, rounds: int | None = None) -> bytes:
+    """``data`` after one to three CSV mutations (cells, rows, separators, numbers,
+    truncation), random bytes, or another encoding (Latin-1, UTF-16, a BOM)."""
+    for _ in range(rounds or rng.randint(1, 3)):
+        roll = rng.random()
+        if roll < 0.1:
+            data = m_random_bytes(data, rng)
+            continue
+        text = data.decode("utf-8", errors="surrogateescape")
+        if roll < 0.2:
+            encoding = rng.choice(["latin-1", "utf-16", "utf-8-sig", "cp1252"])
+            data = text.replace("# ", "# mesur\u00e9 ", 1).encode(encoding, errors="replace")
+            continue
+        text = rng.choice(CSV_MUTATIONS)(text, rng)
+        data = text.encode("utf-8", errors="surrogateescape")
+    return data
+
+
+register(Target("csv", _csv_seeds, _read_csv, ".csv", mutate_csv))
+
+
 # -- running one case ------------------------------------------------------------------------
 class _Hang(Exception):
     pass
@@ -285,7 +430,7 @@ def fuzz(targets, seconds: float, seed: int = 0, timeout: float = 10.0, save: Pa
         folder = Path(tmp)
         while time.monotonic() < end:
             for target in targets:
-                data = mutate(rng.choice(seeds[target.name]), rng)
+                data = target.mutated(rng.choice(seeds[target.name]), rng)
                 outcome, detail = run_case(target, data, folder, timeout)
                 c = counts[target.name]
                 c["cases"] += 1

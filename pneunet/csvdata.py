@@ -156,7 +156,7 @@ class CsvFile:
                     return
                 else:
                     data, tail = data + b"\n", b""  # a last line without its newline
-                yield _decode(data, self.source, line_base + 1)
+                yield _decode(data, self.source, line_base + 1).replace("\r\n", "\n")
                 line_base += data.count(b"\n")
                 if not block:
                     return
@@ -167,9 +167,10 @@ class CsvFile:
         import numpy as np
 
         start = 0
-        if line_base < self.header_line:  # the block holding the header
-            for _ in range(self.header_line - line_base):
-                start = text.index("\n", start) + 1
+        for _ in range(max(0, self.header_line - line_base)):  # comments and the header
+            start = text.find("\n", start) + 1
+            if not start:  # the header is in a later block
+                return "", np.empty(0, dtype=np.int64)
         body = text[start:]
         first = line_base + text.count("\n", 0, start) + 1
         if "#" not in body and not _BLANK.search("\n" + body):
@@ -181,7 +182,7 @@ class CsvFile:
 
 
 #: an empty or blank line (the text is prefixed with a newline before searching)
-_BLANK = re.compile(r"\n[ \t\r]*(\n|$)")
+_BLANK = re.compile(r"\n[ \t]*(\n|$)")
 
 
 def _parse(body: str, numbers, columns, numeric, source):
@@ -193,7 +194,7 @@ def _parse(body: str, numbers, columns, numeric, source):
     if body.count(",") != len(numbers) * (n_fields - 1):
         _check_fields(body.split("\n")[:-1], numbers, n_fields, source)
     try:
-        return pd.read_csv(io.StringIO(body), header=None, names=columns,
+        return pd.read_csv(io.StringIO(body), header=None, names=columns, lineterminator="\n",
                            skipinitialspace=True, dtype={c: "float64" for c in numeric})
     except pd.errors.ParserError as err:  # quoted commas, or a long row beside a short one
         m = re.search(r"in line (\d+), saw (\d+)", str(err))
@@ -203,7 +204,7 @@ def _parse(body: str, numbers, columns, numeric, source):
                         hint="every row needs one value per column (a ragged or cut row; fix "
                              "or delete it)") from None
     except (ValueError, TypeError):
-        frame = pd.read_csv(io.StringIO(body), header=None, names=columns,
+        frame = pd.read_csv(io.StringIO(body), header=None, names=columns, lineterminator="\n",
                             skipinitialspace=True, dtype={c: str for c in numeric})
         for c in numeric:
             frame[c] = _numbers(frame[c], c, numbers, source)

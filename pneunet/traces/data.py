@@ -85,6 +85,10 @@ def _plan(columns, signals, where, notes):
             raise DataError(f"column {name} holds gauge pressures", where=where,
                             hint=f"a recording needs absolute pressures: add the ambient "
                                  f"pressure and name the column {cu.canonical}")
+        if cu.canonical in units:
+            first = next((k for k, v in rename.items() if v == cu.canonical), cu.canonical)
+            raise DataError(f"columns {first} and {name} both hold {cu.canonical}", where=where,
+                            hint="keep one of them (or rename the other)")
         if name != cu.canonical:
             rename[name] = cu.canonical
             notes.append(f"column {name} read as {cu.canonical} (unit {cu.pint_unit})")
