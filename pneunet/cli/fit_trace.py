@@ -148,7 +148,7 @@ def main(args) -> int:
 
     with stdout_to_stderr(args.json), collect() as heard:
         out, text = _run(args, data, build, params, fixed, say)
-    out["solver_messages"] = summarize(heard)  # this process's simulations, not the workers'
+    out["solver_messages"] = summarize(heard)  # the workers' simulations included
     if args.json:
         print(json.dumps(_finite(out), indent=1, default=_json_default, allow_nan=False))
     else:

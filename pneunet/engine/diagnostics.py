@@ -313,6 +313,29 @@ def _fastest_node(solution, messages) -> str | None:
     return f"node {max(rates, key=rates.get)[2:]}" if rates else None
 
 
+class _Relayed:
+    """``fun`` for a worker process: returns its value and its simulations' Diagnostics."""
+
+    def __init__(self, fun):
+        self.fun = fun
+
+    def __call__(self, x):
+        with collect() as heard:
+            value = self.fun(x)
+        return value, heard
+
+
+def pool_map(pool, fun, xs) -> list:
+    """``list(pool.map(fun, xs))``, passing the workers' Diagnostics on to the
+    :func:`collect` blocks of this process (the workers announce their own warnings)."""
+    out = []
+    for value, heard in pool.map(_Relayed(fun), xs):
+        for listener in _listeners:
+            listener.extend(heard)
+        out.append(value)
+    return out
+
+
 def summarize(heard: list[Diagnostics]) -> dict:
     """JSON-ready totals over simulations: messages, simulations with messages, stopped
     simulations, and messages by kind."""

@@ -24,6 +24,7 @@ import numpy as np
 from ..errors import SolverError
 from ..reprs import Summarized, listed, number
 from ..truth.locate import best_lag, hot_phases, phase_profile
+from ..truth.lsq import evaluate_many
 from ..truth.noise import difference_sigma, segments
 from ..truth.verdict import TOLERANCE, Step, at_floor, decide
 from ..truth.waterfall import Waterfall
@@ -222,7 +223,7 @@ def _screen(cand, names, x_base, jac, params, model_args, data, pool):
     bounds = (np.log([params[k][1] for k in names]), np.log([params[k][2] for k in names]))
     tasks = [_ScreenTask(e, p, names, x_base, jac, bounds, model_args, data)
              for e in cand for p in e.grid()]
-    outs = [t() for t in tasks] if pool is None else list(pool.map(_run_task, tasks))
+    outs = evaluate_many(_run_task, tasks, pool)
     rows = []
     for e in cand:
         mine = [o for t, o in zip(tasks, outs) if t.effect is e]

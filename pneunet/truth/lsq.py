@@ -25,10 +25,13 @@ class LsqResult:
 
 
 def evaluate_many(fun, xs, pool=None) -> list:
-    """``[fun(x) for x in xs]``, in ``pool`` (an Executor) when given."""
+    """``[fun(x) for x in xs]``, in ``pool`` (an Executor) when given (the workers'
+    solver messages are counted here too)."""
     if pool is None or len(xs) < 2:
         return [fun(x) for x in xs]
-    return list(pool.map(fun, xs))
+    from ..engine.diagnostics import pool_map
+
+    return pool_map(pool, fun, xs)
 
 
 #: fresh starts of LM after it stepped past a bound (each with that parameter held there)

@@ -178,3 +178,21 @@ def test_a_transient_bar_reaches_the_terminal_through_the_solver_capture(monkeyp
     monkeypatch.setattr(sys, "stderr", stream)
     oscillator().tran(1.0, progress=True)
     assert "transient" in stream.text and "1/1 s" in stream.text
+
+
+def _fold_run(_):
+    return oscillator(fold_threshold=1e-8).tran(5.0).stats["solver_messages"]
+
+
+@pytest.mark.filterwarnings("ignore::pneunet.engine.diagnostics.SolverWarning")
+def test_messages_of_simulations_in_worker_processes_reach_the_parents_count():
+    from pneunet.engine.diagnostics import collect, pool_map, summarize
+    from pneunet.workers import process_pool
+
+    pool = process_pool(2)
+    try:
+        with collect() as heard:
+            counts = pool_map(pool, _fold_run, [0, 1])
+    finally:
+        pool.shutdown()
+    assert len(heard) == 2 and summarize(heard)["count"] == sum(counts) >= 2
