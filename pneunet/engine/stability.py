@@ -13,12 +13,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..reprs import Summarized
+
 #: unknowns above which no eigenvalues are computed (dense QZ costs ~n³: ~0.1 s at 200)
 EIGEN_LIMIT = 200
 
 
-@dataclass(frozen=True)
-class Stability:
+@dataclass(frozen=True, repr=False)
+class Stability(Summarized):
     """Eigenvalues (1/s, sorted by decreasing real part) of a linearised steady state.
 
     ``stable``: every mode decays; None when not computed (``reason`` says why);
@@ -29,6 +31,14 @@ class Stability:
     stable: bool | None = None
     marginal: bool = False
     reason: str = ""
+
+    def _summary(self):
+        verdict = ("not computed" if self.stable is None else "stable" if self.stable else
+                   "marginal" if self.marginal else "UNSTABLE")
+        rows = [("modes", str(len(self.eigenvalues)))]
+        if self.slowest is not None:
+            rows.append(("slowest eigenvalue", f"{_format(self.slowest)} 1/s"))
+        return verdict, rows, ".describe(), .eigenvalues, .slowest"
 
     @property
     def slowest(self) -> complex | None:

@@ -9,6 +9,8 @@ def test_the_papers_oscillator_will_not_settle_at_its_operating_point():
     assert op.stability.stable is False
     assert op.stability.slowest.real > 0.1  # 1/s: the deviation grows within seconds
     assert "UNSTABLE" in str(op) and "will not settle" in str(op)
+    assert repr(op.stability) == ("<Stability UNSTABLE: modes 1, slowest eigenvalue +1.19 1/s; "
+                                  ".describe(), .eigenvalues, .slowest>")
 
 
 def test_with_r_out_zero_it_settles_at_the_rate_the_transient_decays():
