@@ -40,6 +40,16 @@ def split(text: str):
 SCALE_LETTER_UNITS = {("m", "length"), ("µ", "length")}  # metre, micron
 
 
+#: what a unit may look like before pint is asked (pint's parser is slow on long text:
+#: ``1eee…`` with 10^5 letters took minutes)
+_UNIT_TEXT = re.compile(r"[A-Za-zµ°%0-9_*/^.()\-]{1,40}")
+
+
+def plausible_unit(unit: str) -> bool:
+    """True if ``unit`` could be a unit (at most 40 characters of unit syntax)."""
+    return bool(_UNIT_TEXT.fullmatch(unit))
+
+
 @functools.lru_cache(maxsize=512)
 def _unit_dimension_matches(unit: str, slot: str) -> bool:
     """True if ``unit`` is a unit whose dimension fits ``slot``.
@@ -49,6 +59,8 @@ def _unit_dimension_matches(unit: str, slot: str) -> bool:
     """
     from ..units import FAST_FACTORS
 
+    if not plausible_unit(unit):
+        return False
     if (unit, slot) in FAST_FACTORS:
         return True
     if unit.lower() in SCALE and unit == unit.lower():
@@ -88,14 +100,17 @@ def convert(text: str, slot: str, span: SourceSpan, *, name: str, ambient: float
     if not gauge and not _unit_dimension_matches(unit, slot) and suffix.lower() in SCALE:
         return magnitude * SCALE[suffix.lower()]
     if slot == "dimensionless" and not gauge:
-        raise NetlistError(f"{name} is a plain number, got unit {suffix!r}", span=span,
+        raise NetlistError(f"{name} is a plain number, got unit {_cut(suffix)!r}", span=span,
                            hint="write it without a unit (SPICE scale factors like 2k are allowed)")
+    if not plausible_unit(unit):
+        raise NetlistError(f"{name}: unknown unit {_cut(suffix)!r}", span=span,
+                           hint=f"{name} needs {pretty(SLOTS[slot])}, e.g. {example(slot)}")
     try:
         return float(to_internal(magnitude, unit, slot, gauge=gauge, ambient_kpa=ambient,
                                  gas=gas, name=name))
     except ParameterError as err:
         if err.message.startswith(f"{name}: unknown unit"):
-            raise NetlistError(f"{name}: unknown unit {suffix!r}", span=span,
+            raise NetlistError(f"{name}: unknown unit {_cut(suffix)!r}", span=span,
                                hint=f"{name} needs {pretty(SLOTS[slot])}, e.g. {example(slot)}") \
                 from None
         raise NetlistError(err.message, span=span, hint=err.hint) from None
@@ -121,8 +136,8 @@ def number_in_expression(text: str, span: SourceSpan, ambient: float = 101.325) 
         if _unit_dimension_matches(unit, slot):
             return float(to_internal(magnitude, unit, slot, gauge=gauge,
                                      ambient_kpa=_AMBIENT.get("kPa", ambient)))
-    raise NetlistError(f"unknown unit or scale factor {suffix!r} in {text!r}", span=span,
-                       hint="scale factors: f p n u m k meg g t; units: kPa, mL, ms, ...")
+    raise NetlistError(f"unknown unit or scale factor {_cut(suffix)!r} in {_cut(text)!r}",
+                       span=span, hint="scale factors: f p n u m k meg g t; units: kPa, mL, ms, ...")
 
 
 # ambient pressure used for gauge units inside expressions (set while elaborating)

@@ -109,3 +109,15 @@ def test_sweep_lists_count_against_max_sweep_points():
         parse_netlist(text, limits=Limits(max_sweep_points=2))
     assert (info.value.span.line, info.value.span.column) == (5, 8)
     assert "a list of 3 values (limit max_sweep_points = 2)" in info.value.message
+
+
+@pytest.mark.parametrize("line", ["R2 a atm 1" + "e" * 90_000, "R2 a atm {1" + "e" * 90_000 + "}",
+                                  ".options rtol=1" + "k" * 90_000],
+                         ids=["slot", "expression", "plain number"])
+def test_a_very_long_unit_is_refused_without_asking_pint(line):
+    """pint's parser took minutes on a 10^5-letter unit; units are at most 40 characters."""
+    start = time.perf_counter()
+    with pytest.raises(NetlistError, match="unit") as info:
+        parse_netlist(BASE + line + "\n")
+    assert time.perf_counter() - start < 3 and info.value.span.line == 4
+    assert len(info.value.message) < 200
