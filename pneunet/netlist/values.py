@@ -42,7 +42,7 @@ SCALE_LETTER_UNITS = {("m", "length"), ("µ", "length")}  # metre, micron
 
 #: what a unit may look like before pint is asked (pint's parser is slow on long text:
 #: ``1eee…`` with 10^5 letters took minutes)
-_UNIT_TEXT = re.compile(r"[A-Za-zµ°%0-9_*/^.()\-]{1,40}")
+_UNIT_TEXT = re.compile(r"[A-Za-zµ°%0-9_*/^.()·²³\-]{1,40}")
 
 
 def plausible_unit(unit: str) -> bool:
