@@ -6,7 +6,7 @@ import re
 
 from .deck import DC, Signal, Step, Tran
 from .located import did_you_mean as _close, error_at as _err
-from .syntax import Call, Pair, Word
+from .syntax import Call, Word
 
 
 class AnalysisStatements:
@@ -94,8 +94,7 @@ class AnalysisStatements:
             raise _err(".step needs a parameter name", items[0] if items else st.span,
                        "e.g. .step param Rout list 0.566 1.132")
         name = items[0].text
-        declared = [it.key.text for s in self.source.top if s.keyword == ".param"
-                    for it in s.items[1:] if isinstance(it, Pair) and isinstance(it.key, Word)]
+        declared = self.declared_params()
         if name not in declared:
             raise _err(f".step of {name!r}, which no .param line defines", items[0],
                        _close(name, declared) or "define it first: .param NAME=value")

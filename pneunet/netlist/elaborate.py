@@ -68,7 +68,7 @@ class _Builder(ModelCards, AnalysisStatements, MeasureStatements):
                            _close(st.keyword, DIRECTIVES))
         self.options = self._options([st for st in top if st.keyword in (".options", ".option")])
         set_expression_ambient(self.options.ambient)
-        self._check_overrides(top)
+        self._check_overrides()
         self.scope = Scope(dict(self.overrides))
         for st in top:
             if st.keyword == ".param":
@@ -121,10 +121,14 @@ class _Builder(ModelCards, AnalysisStatements, MeasureStatements):
                        deck.steps[-1].span, self.limits.hint("max_sweep_points"))
         return deck
 
-    def _check_overrides(self, top):
+    def declared_params(self) -> list:
+        """The names the top level's ``.param`` lines define (what may be overridden)."""
+        return [it.key.text for st in self.source.top if st.keyword == ".param"
+                for it in st.items[1:] if isinstance(it, Pair) and isinstance(it.key, Word)]
+
+    def _check_overrides(self):
         """Every overridden name (``--param``, ``--set``, ``.step`` values) is a ``.param``."""
-        declared = [it.key.text for st in top if st.keyword == ".param" for it in st.items[1:]
-                    if isinstance(it, Pair) and isinstance(it.key, Word)]
+        declared = self.declared_params()
         for name, value in self.overrides.items():
             if name not in declared:
                 raise NetlistError(f"parameter {name!r} is not defined by a .param line",
