@@ -63,3 +63,17 @@ def test_strict_turns_the_single_connection_warning_into_exit_2(tmp_path, capsys
     err = capsys.readouterr().err
     assert f"{path}:4:1: error: node 'tnak' has one connection (Rvent); did you mean 'tank'?" in err
     assert main(["run", "--strict", str(path), "-o", str(tmp_path / "o"), "-q"]) == 2
+
+
+REC = Path(__file__).parents[2] / "examples" / "data" / "oscillator_rec.csv"
+
+
+@pytest.mark.parametrize("args, fragment", [
+    (["--fit", "Rot=1.4:0.3:5"], "parameter 'Rot' is not defined by a .param line"),
+    (["--fit", "Rout=1.4:0.3:5", "--set", "Rvnt=3"], "did you mean 'Rvent'?"),
+    (["--fit", "X1.pclos=90:80:100"], "X1 has no parameter 'pclos'"),
+])
+def test_fit_trace_names_are_checked_before_fitting(args, fragment, capsys):
+    assert main(["fit-trace", str(REC), str(OSC), *args, "--no-progress", "--max-nfev", "1"]) == 2
+    err = capsys.readouterr().err
+    assert fragment in err and "Traceback" not in err
