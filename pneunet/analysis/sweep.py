@@ -153,8 +153,8 @@ def require_builder(build, caller: str) -> None:
 
     got = "a Circuit" if isinstance(build, Circuit) else f"a {type(build).__name__}"
     raise PneunetError(
-        f"{caller} takes a function from a point (dict of parameter values, for logic "
-        f"inputs {{'SOURCE.value': kPa}}) to a Circuit, got {got}",
+        f"{caller} takes a function from a point (a dict of parameter values) to a new "
+        f"Circuit, got {got}",
         hint="for a netlist pass NetlistBuilder('file.pn'); in Python a function "
              "build(point) that returns a new Circuit, e.g. pneunet.analysis.circuits.inverter")
 

@@ -18,12 +18,13 @@
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..effects import ValveModel, as_effect, available_effects
-from ..errors import ParameterError
+from ..errors import DataError, ParameterError
 from ..reprs import Summarized, listed
 from .features import FEATURE_LABELS, feature_table, noise_floor, prepare
 from .fitting import (ModelFit, cross_validate, fit_model, group_bootstrap_weights, group_folds,
@@ -374,6 +375,10 @@ def _as_frame(data, load_options):
         return data
     if hasattr(data, "frame"):
         return data.frame
+    if not isinstance(data, (str, os.PathLike)):
+        raise DataError(f"diagnose takes bench data: a CSV file, a DataFrame or "
+                        f"Measurements, got {type(data).__name__}",
+                        hint="the format: docs/data-format.md")
     return load_measurements(data, **load_options).frame
 
 

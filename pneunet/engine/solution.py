@@ -143,6 +143,14 @@ class Solution(Summarized):
                 "sol.pressure(node), sol.flow(element), sol.at(t), sol.final(), sol.stats, "
                 "sol.to_pandas(), sol.plot()")
 
+    def _signal_name(self, name: str) -> str:
+        """A signal's name; a bare node or element name means its pressure or flow."""
+        for key in (name, f"p_{name}", f"mdot_{name}"):
+            if key in self.signals:
+                return key
+        self[name]  # the error with a did-you-mean
+        return name
+
     def pressure(self, node: str) -> np.ndarray:
         """Absolute pressure of ``node`` over time, kPa."""
         return self[f"p_{node}"]
@@ -185,7 +193,7 @@ class Solution(Summarized):
         ``path`` is given, else returns the figure."""
         from ..plotting import draw_traces, pyplot, save
 
-        names = list(signals) if signals else list(self.signals)
+        names = [self._signal_name(n) for n in signals] if signals else list(self.signals)
         pressures = {n[2:]: self[n] for n in names
                      if self.units.get(n) == "kPa" and n.startswith("p_")}
         flows = {n[5:]: self[n] for n in names if self.units.get(n) == "mg/s"}

@@ -28,8 +28,16 @@ def read_trace(path_or_frame, signals=None, *, max_rows: int | None = TRACE_MAX_
     line for: a missing file or time column, a column that is not a signal, a
     requested signal missing, gauge pressures, NaN/inf or text cells, times that do
     not increase strictly, fewer than 5 rows."""
+    import os
+
     import pandas as pd
 
+    if hasattr(path_or_frame, "signals") and hasattr(path_or_frame, "table"):  # a Solution
+        path_or_frame = pd.DataFrame(path_or_frame.table(
+            lambda c: c == "time_s" or c.startswith(("p_", "mdot_"))))
+    elif not isinstance(path_or_frame, (str, os.PathLike, pd.DataFrame)):
+        raise DataError(f"a recording is a CSV file, a DataFrame or a Solution, got "
+                        f"{type(path_or_frame).__name__}", hint="the format: docs/data-format.md")
     if isinstance(path_or_frame, pd.DataFrame):
         where = path_or_frame.attrs.get("source", "trace")
         notes = list(path_or_frame.attrs.get("notes", []))

@@ -248,8 +248,10 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
     ``workers``: processes
     for parallel finite differences (None: 2 where there are 2 cores); ``progress``:
     a callable taking a message (e.g. ``print`` to stderr)."""
+    from ..analysis.sweep import require_builder
     from .model import process_pool
 
+    require_builder(build, "diagnose_trace")
     say = progress or (lambda msg: None)
     wall = time.perf_counter()
     df = read_trace(data, signals)

@@ -147,8 +147,10 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
     the samples in ln-parameters.  Signals are compared in kPa when all are pressures,
     else in % of each signal's range.
     """
+    from ..analysis.sweep import require_builder
     from .start import _feature_fit, initial_values
 
+    require_builder(build, "fit_trace")
     wall = time.perf_counter()
     df = read_trace(data, signals)
     where = where or df.attrs["source"]

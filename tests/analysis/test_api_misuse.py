@@ -75,3 +75,30 @@ def test_a_time_that_is_no_time_is_a_parameter_error():
 
     with pytest.raises(ParameterError, match="t_stop"):
         oscillator().tran("30kPa")
+
+
+def test_data_calls_given_a_solution_or_a_circuit():
+    from pneunet.analysis.circuits import oscillator as build
+    from pneunet.diagnose import diagnose
+    from pneunet.errors import DataError
+    from pneunet.traces import diagnose_trace, fit_trace, read_trace
+
+    sol = build().tran(3.0, t_step=0.05)
+    recording = read_trace(sol)  # a simulation stands in for a recording
+    assert recording.columns[0] == "time_s" and "p_tank_kPa" in recording
+    with pytest.raises(DataError, match="diagnose takes bench data.*got Solution"):
+        diagnose(sol)
+    for call in (fit_trace, diagnose_trace):
+        with pytest.raises(PneunetError, match="takes a function from a point"):
+            call(build(), sol, {"Rvent": (3.0, 1.0, 10.0)})
+
+
+def test_solution_plot_takes_bare_names_and_names_a_misspelt_one():
+    from pneunet.paper_circuits import oscillator
+
+    sol = oscillator().tran(1.0)
+    fig = sol.plot(signals=["tank", "Rvent"])
+    assert [line.get_label() for ax in fig.axes for line in ax.get_lines()] == ["tank", "Rvent"]
+    with pytest.raises(PneunetError, match="no signal 'tnak'") as e:
+        sol.plot(signals=["tnak"])
+    assert "p_tank" in e.value.hint
