@@ -108,5 +108,10 @@ def expand(src: SourceText, policy: IncludePolicy, limits: Limits = DEFAULT,
             loop = " -> ".join(p.name for p in [*reversed(files), target])
             raise NetlistError(f"recursive .include: {loop}", span=item.span)
         via = (str(st.span).rsplit(":", 1)[0], *item.span.via)
-        yield from expand(read_source(target, via=via), policy, limits,
-                          ((target, st.span), *chain))
+        try:
+            included = read_source(target, limits=limits, via=via)
+        except NetlistError as err:
+            if err.span is not None:
+                raise
+            raise NetlistError(err.message, span=item.span, hint=err.hint) from None  # unreadable
+        yield from expand(included, policy, limits, ((target, st.span), *chain))

@@ -108,3 +108,28 @@ def test_lib_is_an_include(project):
     (project / "top.pn").write_text('.lib "v.pn" typical\n')
     with pytest.raises(NetlistError, match=".lib needs one file name"):
         parse_file(project / "top.pn")
+
+
+def test_an_unreadable_included_file_is_reported_at_the_include(project, monkeypatch):
+    from pneunet.netlist import includes
+
+    (project / "v.pn").write_text("R9 a atm 1\n")
+    (project / "top.pn").write_text('P1 a 200kPa\n.include "v.pn"\n')
+
+    def denied(path, **kw):
+        raise NetlistError(f"cannot read {path}: Permission denied")
+
+    monkeypatch.setattr(includes, "read_source", denied)
+    with pytest.raises(NetlistError) as info:
+        parse_file(project / "top.pn")
+    assert (info.value.span.line, info.value.span.column) == (2, 10)
+    assert "Permission denied" in info.value.message
+
+
+def test_limits_apply_inside_included_files(project):
+    (project / "v.pn").write_text("R9 a atm 1 ; " + "x" * 200 + "\n")
+    (project / "top.pn").write_text('P1 a 200kPa\n.include "v.pn"\n')
+    with pytest.raises(NetlistError) as info:
+        parse_file(project / "top.pn", limits={"max_line_length": 100})
+    assert info.value.span.file.endswith("v.pn") and info.value.span.line == 1
+    assert "max_line_length = 100" in info.value.message
