@@ -8,7 +8,8 @@ and the message on the next line.
 
 :func:`captured` wraps a whole solve (never a step): while it runs, file
 descriptors 1 and 2 go to temporary files and ``sys.stdout``/``sys.stderr`` to
-buffers (tens of µs per solve).  Afterwards the SUNDIALS lines become
+buffers (tens of µs per solve; simulations in several threads of one process take
+turns).  Afterwards the SUNDIALS lines become
 :class:`SolverMessage` s, counted in the solution's ``stats`` (``solver_messages``,
 ``solver_diagnostics``) or attached to the :class:`~pneunet.errors.SolverError`
 (``err.diagnostics``), and announced once per kind and process as a
@@ -186,7 +187,7 @@ def _outside_pneunet() -> int:
 # -- capture --------------------------------------------------------------------------
 _lock = threading.Lock()
 _local = threading.local()
-_files: dict = {}  # pid -> (file for fd 1, file for fd 2), one pair per process
+_files: dict = {}  # "pid", "fds": this process's temporary files for fds 1 and 2
 
 
 class _Capture:
@@ -194,16 +195,20 @@ class _Capture:
 
     def __enter__(self):
         if _files.get("pid") != os.getpid():  # a forked worker gets its own files
-            _files.update(pid=os.getpid(), fds=(tempfile.TemporaryFile(), tempfile.TemporaryFile()))
+            _files.update(pid=os.getpid(),
+                          fds=(tempfile.TemporaryFile(), tempfile.TemporaryFile()))
         self.files = _files["fds"]
         self.streams = (sys.stdout, sys.stderr)
         for stream in self.streams:
             with contextlib.suppress(Exception):
                 stream.flush()
         _libc_flush()
-        self.saved = [os.dup(1), os.dup(2)]
-        os.dup2(self.files[0].fileno(), 1)
-        os.dup2(self.files[1].fileno(), 2)
+        try:
+            self.saved = [os.dup(1), os.dup(2)]
+        except OSError:  # a process without fds 1 and 2: C output goes nowhere anyway
+            self.saved = []
+        for fd, _ in zip((1, 2), self.saved):
+            os.dup2(self.files[fd - 1].fileno(), fd)
         self.buffers = (io.StringIO(), io.StringIO())
         sys.stdout, sys.stderr = self.buffers
         self.terminal = None
@@ -214,7 +219,7 @@ class _Capture:
         if self.terminal is None:
             stream = self.streams[1]
             self.terminal = (os.fdopen(os.dup(self.saved[1]), "w", buffering=1)
-                             if _fileno(stream) == 2 else stream)
+                             if _fileno(stream) == 2 and self.saved else stream)
         return self.terminal
 
     def __exit__(self, *exc) -> None:
