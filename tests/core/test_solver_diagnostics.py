@@ -196,3 +196,16 @@ def test_messages_of_simulations_in_worker_processes_reach_the_parents_count():
     finally:
         pool.shutdown()
     assert len(heard) == 2 and summarize(heard)["count"] == sum(counts) >= 2
+
+
+def test_a_process_without_stdout_and_stderr_still_simulates(tmp_path):
+    import subprocess
+    import sys
+
+    done = tmp_path / "done"
+    code = ("from pneunet.paper_circuits import oscillator; "
+            f"n = oscillator().tran(1.0).t.size; open({str(done)!r}, 'w').write(str(n))")
+    subprocess.run([sys.executable, "-c", code], stdout=subprocess.DEVNULL, check=True,
+                   stderr=subprocess.DEVNULL, close_fds=True,
+                   preexec_fn=lambda: (__import__("os").close(1), __import__("os").close(2)))
+    assert int(done.read_text()) > 10
