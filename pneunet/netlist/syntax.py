@@ -220,11 +220,18 @@ def _item(node, name, lines, span_of) -> Item:
 
 
 def read_source(path: Path, *, limits=None, via: tuple = ()) -> SourceText:
-    """The parsed netlist file: UTF-8, with or without a byte-order mark."""
+    """The parsed netlist file: UTF-8, with or without a byte-order mark; a folder, a
+    device or a pipe is refused before it is opened (``/dev/zero`` never ends)."""
+    import stat
+
     try:
+        if not stat.S_ISREG(path.stat().st_mode):
+            raise NetlistError(f"{path} is not a regular file (a folder, device or pipe)",
+                               where=str(path), hint="name a netlist file")
         raw = path.read_bytes()
     except OSError as exc:
-        raise NetlistError(f"cannot read {path}: {exc.strerror or exc}") from None
+        raise NetlistError(f"cannot read {path}: {exc.strerror or exc}", where=str(path)) \
+            from None
     try:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError as exc:

@@ -121,3 +121,15 @@ def test_a_very_long_unit_is_refused_without_asking_pint(line):
         parse_netlist(BASE + line + "\n")
     assert time.perf_counter() - start < 3 and info.value.span.line == 4
     assert len(info.value.message) < 200
+
+
+@pytest.mark.parametrize("target", ["/dev/zero", "folder", "missing.pn"])
+def test_the_netlist_argument_itself_may_not_be_a_device_or_a_folder(target, tmp_path, capsys):
+    path = tmp_path / target if not target.startswith("/") else target
+    (tmp_path / "folder").mkdir()
+    start = time.perf_counter()
+    assert main(["check", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert time.perf_counter() - start < 5
+    assert err.startswith(f"{path}: error: ")
+    assert ("not a regular file" in err) != (target == "missing.pn")
