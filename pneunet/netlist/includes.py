@@ -84,8 +84,11 @@ def _short(text: str, width: int = 80) -> str:
 
 
 def expand(src: SourceText, policy: IncludePolicy, limits: Limits = DEFAULT,
-           chain: tuple = ()):
-    """The statements of ``src`` with each ``.include`` replaced by the included file's."""
+           chain: tuple = (), count: list | None = None):
+    """The statements of ``src`` with each ``.include`` replaced by the included file's
+    (``count``: files included so far, repeats counted; a file including another twice,
+    twenty levels deep, would make 2^20)."""
+    count = [0] if count is None else count
     for st in src.statements:
         if not (st.is_directive and st.keyword in KEYWORDS):
             yield st
@@ -107,6 +110,11 @@ def expand(src: SourceText, policy: IncludePolicy, limits: Limits = DEFAULT,
         if target in files:
             loop = " -> ".join(p.name for p in [*reversed(files), target])
             raise NetlistError(f"recursive .include: {loop}", span=item.span)
+        count[0] += 1
+        if count[0] > limits.max_includes:
+            raise NetlistError(f"more than {limits.max_includes} files included in all, repeats "
+                               f"counted ({limits.exceeded('max_includes')})", span=item.span,
+                               hint=limits.hint("max_includes"))
         via = (str(st.span).rsplit(":", 1)[0], *item.span.via)
         try:
             included = read_source(target, limits=limits, via=via)
@@ -114,4 +122,4 @@ def expand(src: SourceText, policy: IncludePolicy, limits: Limits = DEFAULT,
             if err.span is not None:
                 raise
             raise NetlistError(err.message, span=item.span, hint=err.hint) from None  # unreadable
-        yield from expand(included, policy, limits, ((target, st.span), *chain))
+        yield from expand(included, policy, limits, ((target, st.span), *chain), count)

@@ -133,3 +133,14 @@ def test_limits_apply_inside_included_files(project):
         parse_file(project / "top.pn", limits={"max_line_length": 100})
     assert info.value.span.file.endswith("v.pn") and info.value.span.line == 1
     assert "max_line_length = 100" in info.value.message
+
+
+def test_includes_that_double_at_every_level_are_bounded(project):
+    """n0 includes n1 twice, n1 includes n2 twice ... (2^19 files without a total cap)."""
+    for i in range(19):
+        (project / f"n{i}.pn").write_text(f'.include "n{i + 1}.pn"\n.include "n{i + 1}.pn"\n')
+    (project / "n19.pn").write_text(".param a=1\n")
+    with pytest.raises(NetlistError) as info:
+        parse_file(project / "n0.pn")
+    assert "more than 1000 files included in all, repeats counted (limit max_includes = 1000)" \
+        in info.value.message
