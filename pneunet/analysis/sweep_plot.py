@@ -1,7 +1,8 @@
 """Figure of a one-parameter sweep: one panel per measured quantity, with units.
 
-Failed points (an error in the table) and points without oscillation are marked at
-the foot of every panel, never dropped; the legend sits below the panels.
+Failed points (an error in the table), points without oscillation and points where a
+measurement has no value are marked at the foot of the panels, never dropped; the
+legend sits below the panels.
 """
 from __future__ import annotations
 
@@ -27,14 +28,20 @@ def parameter_label(name: str) -> str:
     return PARAMETER_LABELS.get(name, name)
 
 
-def plot_sweep(table, x: str, path=None, title: str | None = None):
-    """Each measured quantity of ``table`` (a sweep's table) against parameter ``x``."""
+def plot_sweep(table, x: str, path=None, title: str | None = None, units=None):
+    """Each measured quantity of ``table`` (a sweep's table) against parameter ``x``;
+    ``units``: {column: unit} of a ``.meas`` sweep's measurements."""
     from ..plotting import pyplot, save
 
-    panels = [(cols, label) for cols, label in QUANTITIES if all(c in table for c in cols)]
-    if not panels:  # a .meas sweep: its measurements, by name
-        panels = [((c,), c) for c in table.columns if c != x and c not in NOT_MEASURED
-                  and table[c].dtype.kind == "f"][:4]
+    if "period_s" in table:  # an oscillation analysis
+        panels = [(cols, label) for cols, label in QUANTITIES if all(c in table for c in cols)]
+    else:  # a .meas sweep: its measurements, one panel per unit
+        by_unit: dict[str, list] = {}
+        for c in table.columns:
+            if c != x and c not in NOT_MEASURED and table[c].dtype.kind == "f":
+                by_unit.setdefault((units or {}).get(c, ""), []).append(c)
+        panels = [(tuple(cols), ", ".join(cols) + (f" ({unit})" if unit else ""))
+                  for unit, cols in list(by_unit.items())[:4]]
     failed = table["error"].notna().to_numpy() if "error" in table else np.zeros(len(table), bool)
     still = (~table["oscillating"].astype(bool).to_numpy() & ~failed
              if "oscillating" in table else np.zeros(len(table), bool))
@@ -48,6 +55,10 @@ def plot_sweep(table, x: str, path=None, title: str | None = None):
                     label=c if len(cols) > 1 else None)
         ax.set_ylabel(label, fontsize=9)
         foot = ax.get_xaxis_transform()  # x in data, y in axes fraction
+        unmeasured = table[list(cols)].isna().all(axis=1).to_numpy() & ~failed & ~still
+        if unmeasured.any():
+            ax.plot(xs[unmeasured], np.full(unmeasured.sum(), 0.04), "d", mfc="none",
+                    color="0.45", transform=foot, label="not measured")
         if still.any():
             ax.plot(xs[still], np.full(still.sum(), 0.04), "o", mfc="none", color="0.45",
                     transform=foot, label="no oscillation")

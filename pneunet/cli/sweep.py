@@ -85,10 +85,13 @@ def main(args) -> int:
         deck.circuit.validate()
         netlist_args.check_nodes(deck.circuit, args.strict)
         has_meas = bool(deck.measures)
+        from ..netlist.runner import measure_unit
+
+        units = {m.name: measure_unit(m) for m in deck.measures}
     else:
         from ..analysis.circuits import oscillator as build
 
-        has_meas = False
+        has_meas, units = False, {}
     if args.lhs or args.mc:
         if not dists:
             raise ParameterError("--lhs/--mc need --tol ranges")
@@ -161,7 +164,7 @@ def main(args) -> int:
 
         summary["agreement"] = agreement(table)
     if args.plot:
-        summary["plot"] = str(_plot(table, axes, args.plot))
+        summary["plot"] = str(_plot(table, axes, args.plot, units))
     if args.json:
         summary["rows"] = json.loads(table.to_json(orient="records"))
         print(json.dumps(summary, indent=1))
@@ -185,11 +188,11 @@ def axes_are_oscillator(args) -> bool:
     return args.analysis in ("regime", "oscillation")
 
 
-def _plot(table, axes, path):
+def _plot(table, axes, path, units):
     from ..analysis.regime import plot_regime_map
     from ..analysis.sweep_plot import plot_sweep
 
     names = [a.name for a in axes]
     if len(names) == 2 and "regime" in table.columns:
         return plot_regime_map(table, names[0], names[1], path)
-    return plot_sweep(table, names[0] if names else table.columns[0], path)
+    return plot_sweep(table, names[0] if names else table.columns[0], path, units=units)

@@ -29,3 +29,16 @@ def test_failed_and_non_oscillating_points_are_marked_on_every_panel():
         assert list(marked["simulation failed"]) == [3.0]
         assert list(marked["no oscillation"]) == [0.0]
     assert fig.legends  # one legend, outside the panels
+
+
+def test_a_meas_sweep_has_one_panel_per_unit_and_marks_missing_values():
+    nan = float("nan")
+    table = pd.DataFrame({"Rvent": [2.0, 5.0], "period": [4.6, nan], "freq": [0.22, nan],
+                          "p_max": [320.0, 185.0], "p_min": [184.0, 184.0],
+                          "error": [None, None]})
+    fig = plot_sweep(table, "Rvent", units={"period": "s", "freq": "Hz", "p_max": "kPa",
+                                            "p_min": "kPa"})
+    assert [ax.get_ylabel() for ax in fig.axes] == ["period (s)", "freq (Hz)",
+                                                    "p_max, p_min (kPa)"]
+    marks = {line.get_label(): list(line.get_xdata()) for line in fig.axes[0].get_lines()}
+    assert marks["not measured"] == [5.0]
