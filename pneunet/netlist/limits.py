@@ -19,7 +19,7 @@ class Limits:
     max_array_size: int = 100_000         # copies made by one [lo:hi] range
     max_include_depth: int = 20           # .include files inside each other
     max_includes: int = 1_000             # files included in all, repeats counted
-    max_elements: int = 200_000           # elements in the flattened circuit
+    max_elements: int = 100_000           # elements in the flattened circuit
     max_output_points: int = 10_000_000   # output points of one .tran (t_stop / t_step)
     max_sweep_points: int = 100_000       # points of one .dc, and of all .step lines together
 
@@ -44,7 +44,7 @@ class Limits:
         return dataclasses.replace(self, **changes)
 
     def exceeded(self, name: str) -> str:
-        """The text naming a limit in an error: ``limit max_elements = 1000000``."""
+        """The text naming a limit in an error: ``limit max_elements = 100000``."""
         return f"limit {name} = {getattr(self, name)}"
 
     def hint(self, name: str) -> str:
