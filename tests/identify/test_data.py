@@ -129,3 +129,28 @@ def test_several_valves_need_a_choice(small):
     with pytest.raises(DataError, match="2 valves"):
         load_measurements(two)
     assert len(load_measurements(two, valve="B")) == 100
+
+
+def test_unit_suffixed_columns_are_read_in_their_unit(tmp_path, small):
+    raw = small.rename(columns={"p_in_kPa": "p_in_bar", "p_out_kPa": "p_out_kpa",
+                                "mdot_mg_s": "mdot_g_s"})
+    raw["p_in_bar"] = raw["p_in_bar"] / 100.0
+    raw["mdot_g_s"] = raw["mdot_g_s"] / 1000.0
+    m = load_measurements(write(tmp_path, raw))
+    np.testing.assert_allclose(m.frame[CANON].to_numpy(), small[CANON].to_numpy(), rtol=1e-12)
+    assert "column p_in_bar read as p_in_kPa (unit bar)" in m.notes
+    assert "column p_out_kpa read as p_out_kPa (unit kPa)" in m.notes
+
+
+def test_rows_in_reverse_time_order_are_reversed_with_a_notice(small):
+    m = load_measurements(small.iloc[::-1])
+    np.testing.assert_array_equal(m.frame["time_s"], small["time_s"])
+    assert list(m.frame["row"][:2]) == [200, 199]  # still the rows of the source
+    assert any("reverse time order" in n for n in m.notes)
+
+
+def test_a_file_over_max_rows_is_thinned_evenly_with_a_notice(tmp_path, small):
+    m = load_measurements(write(tmp_path, small), max_rows=60)
+    assert list(m.frame["row"][:3]) == [1, 5, 9] and len(m) == 50  # every 4th row
+    assert "holds 200 data rows, more than the limit of 60: every 4th row" in m.notes[0]
+    np.testing.assert_allclose(m.frame["p_in_kPa"], small["p_in_kPa"][::4])

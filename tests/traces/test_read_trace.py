@@ -1,0 +1,51 @@
+"""read_trace: columns in other units converted with a notice (never dropped), a record
+starting late shifted to 0 with a notice, unknown columns refused, thinning."""
+import numpy as np
+import pytest
+
+from pneunet.errors import DataError
+from pneunet.traces import read_trace
+
+from .standalone import oscillator_record
+
+
+@pytest.fixture(scope="module")
+def record():
+    return oscillator_record(4.0, noise=0.4, seed=3)
+
+
+def test_pressure_in_bar_and_lower_case_kpa_are_converted_not_dropped(tmp_path, record):
+    raw = record.rename(columns={"p_tank_kPa": "p_tank_bar", "p_out_kPa": "p_out_kpa"})
+    raw["p_tank_bar"] = raw["p_tank_bar"] / 100.0
+    path = tmp_path / "rec.csv"
+    raw.to_csv(path, index=False)
+    df = read_trace(path)
+    assert list(df.columns) == ["time_s", "p_tank_kPa", "p_out_kPa"]
+    np.testing.assert_allclose(df["p_tank_kPa"], record["p_tank_kPa"], rtol=1e-12)
+    assert "column p_tank_bar read as p_tank_kPa (unit bar)" in df.attrs["notes"]
+
+
+def test_a_record_starting_at_1000_s_is_shifted_to_0(tmp_path, record):
+    path = tmp_path / "rec.csv"
+    record.assign(time_s=record.time_s + 1000.0).to_csv(path, index=False)
+    df = read_trace(path)
+    np.testing.assert_allclose(df["time_s"], record["time_s"], atol=1e-9)
+    assert "time_s starts at 1000 s: shifted to start at 0" in df.attrs["notes"][0]
+
+
+def test_unknown_columns_are_refused_unless_signals_are_chosen(tmp_path, record):
+    path = tmp_path / "rec.csv"
+    record.assign(comment="x").to_csv(path, index=False)
+    with pytest.raises(DataError, match="column comment is not a signal") as err:
+        read_trace(path)
+    assert err.value.where == str(path)
+    assert list(read_trace(path, ["p_tank_kPa"]).columns) == ["time_s", "p_tank_kPa"]
+
+
+def test_a_long_record_is_thinned_with_a_notice(tmp_path, record):
+    path = tmp_path / "rec.csv"
+    record.to_csv(path, index=False)
+    df = read_trace(path, max_rows=30)
+    assert len(df) == (len(record) + 3) // 4
+    np.testing.assert_allclose(df["p_tank_kPa"], record["p_tank_kPa"][::4])
+    assert "every 4th row is used" in df.attrs["notes"][0]
