@@ -28,12 +28,19 @@ def sweep():
     """``pneunet sweep --plot`` with one axis (plot_sweep) and two (plot_regime_map)."""
     from pneunet.analysis.circuits import oscillator
     from pneunet.analysis.regime import RegimeMeasure, plot_regime_map
-    from pneunet.analysis.sweep import OscillationMeasure, grid, lin, run_sweep
+    from pneunet.analysis.sweep import (DeckMeasure, NetlistBuilder, OscillationMeasure, grid,
+                                        lin, run_sweep)
     from pneunet.analysis.sweep_plot import plot_sweep
+    from pneunet.netlist.runner import measure_unit
 
     one = run_sweep(oscillator, grid(lin("Rout", 0.0, 3.0, 13)),
                     OscillationMeasure(t_stop=40.0), progress=False)
     plot_sweep(one.table, "Rout", OUT / "sweep_1d.png")
+    netlist = NetlistBuilder(ROOT / "netlists" / "oscillator.pn")
+    meas = run_sweep(netlist, grid(lin("Rvent", 1.0, 6.0, 11)), DeckMeasure(netlist),
+                     progress=False)
+    plot_sweep(meas.table, "Rvent", OUT / "sweep_meas.png",
+               units={m.name: measure_unit(m) for m in netlist.deck().measures})
     two = run_sweep(oscillator, grid(lin("Rout", 0.2, 3.0, 8), lin("Rvent", 1.0, 6.0, 8)),
                     RegimeMeasure(), progress=False)
     plot_regime_map(two.table, "Rout", "Rvent", OUT / "regime_map.png")
