@@ -52,7 +52,9 @@ def draw_traces(ax, t, traces: dict, ylabel: str) -> None:
     line labelled ``a = b = c`` (and a note says so), the legend outside on the right."""
     groups = identical_groups(traces)
     for group in groups:
-        ax.plot(t, traces[group[0]], label=" = ".join(group))
+        label = " = ".join(group) if len(group) <= 3 else \
+            " = ".join(group[:2]) + f" = … ({len(group)} traces)"
+        ax.plot(t, traces[group[0]], label=label)
     ax.set_ylabel(ylabel)
     legend_outside(ax, fontsize="small")
     if len(groups) < len(traces):
