@@ -169,7 +169,11 @@ class _ScreenTask:
         model = TraceModel(*self.model_args[0], effects=(eff,), **self.model_args[1])
         fun = TraceResidual(model, names, *self.data)
         xb, limit = self._recentred(model, names, theta), SCREEN_STEP
+        if model.failures:  # a point the circuit cannot be simulated at: no more time on it
+            return self._failed(model)
         r = fun(np.concatenate([xb, theta]))
+        if model.failures:
+            return self._failed(model)
         for _ in range(SCREEN_STEPS):
             step = np.linalg.lstsq(self.jac, -r, rcond=None)[0]
             step *= min(1.0, limit / max(np.max(np.abs(step)), 1e-300))
@@ -184,6 +188,11 @@ class _ScreenTask:
         values.update(self.point)
         return {"x": values, "rss": float(left @ left), "simulations": model.calls}
 
+
+    def _failed(self, model):
+        values = dict(zip(self.names, np.exp(self.x_base)))
+        values.update(self.point)
+        return {"x": values, "rss": math.inf, "simulations": model.calls}
 
     def _recentred(self, model, names, theta):
         """The base parameters moved so the simulated cycle's turning points, rise
@@ -294,6 +303,10 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
             failed = {}
             for row in rows[:screen]:  # best first; stop at one that reaches the floor
                 eff = row["effect"]
+                if not math.isfinite(row["rss"]):
+                    failed[eff.name] = ("not fitted: the circuit could not be simulated at any "
+                                        "point of its parameter range")
+                    continue
                 say(f"fitting {eff.name}")
                 try:
                     fits[eff.name] = _fit_effects(build, df, params, fixed, node, train,
@@ -308,7 +321,8 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
             fitted = sorted((n for n in fits if n != "none"), key=lambda n: fits[n].error(test))
             ranking += [_row(n, fits[n], test, floor) for n in fitted]
             ranking += [{"effect": r["effect"].name, "held_out_rms": None, "fitted": False,
-                         "screen_rms": math.sqrt(r["rss"] / n_res),
+                         "screen_rms": math.sqrt(r["rss"] / n_res)
+                         if math.isfinite(r["rss"]) else None,
                          "note": failed.get(r["effect"].name,
                                             "not fitted: across its parameter range it fits "
                                             "the first cycles worse than the ones fitted "

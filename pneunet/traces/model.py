@@ -35,6 +35,7 @@ class TraceModel:
         self.build, self.fixed, self.effects, self.start = build, dict(fixed or {}), tuple(effects), start
         self.options = dict(options or {})
         self.calls = 0
+        self.failures = 0  # simulations that failed (SolverError, budget included)
         self._times = [] if typical_s is None else [float(typical_s)]
 
     def circuit(self, values: dict):
@@ -69,8 +70,12 @@ class TraceModel:
         budget = max(BUDGET_MIN_S, BUDGET_FACTOR * float(np.median(self._times))) \
             if self._times else None
         start = time.perf_counter()
-        with wall_clock_budget(budget):
-            sol = circuit.tran(t_end, t_step=t_step, start=self.start)
+        try:
+            with wall_clock_budget(budget):
+                sol = circuit.tran(t_end, t_step=t_step, start=self.start)
+        except SolverError:
+            self.failures += 1
+            raise
         self._times.append(time.perf_counter() - start)
         return sol
 
