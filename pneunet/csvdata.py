@@ -60,8 +60,12 @@ class CsvFile:
             raise DataError("no such file", where=self.source, hint="check the path")
         if not self.path.is_file():
             raise DataError("not a regular file", where=self.source, hint="give a CSV file")
-        with self.path.open("rb") as fh:
-            head = fh.read(BLOCK_BYTES)
+        try:
+            with self.path.open("rb") as fh:
+                head = fh.read(BLOCK_BYTES)
+        except OSError as err:
+            raise DataError(f"cannot read the file: {err.strerror or err}", where=self.source,
+                            hint="check its permissions") from None
         if not head.strip():
             raise DataError("the file is empty", where=self.source,
                             hint="a CSV needs a header row (time_s,...) and data rows")
