@@ -81,7 +81,9 @@ class MembraneValve(ElementFamily):
             params = self._fwd.values()
         else:  # each valve's parameters for its flow direction: (6, ..., n)
             forward = (p[..., 0] >= p[..., 1])[..., None, :]
-            params = np.moveaxis(np.where(forward, *self._both), -2, 0)
+            params = np.where(forward, *self._both)
+            if p.ndim > 2:
+                params = np.moveaxis(params, -2, 0)
         return valve_flow_and_partials(p[..., 0], p[..., 1], p[..., 2], *params,
                                        band=self.context.options.flow_band, partials=partials)
 
