@@ -5,8 +5,8 @@
     python benchmarks/bench_bigdata.py --rows 2000000   # one size
 
 The files are written once to --dir (default /tmp/pneunet-bigdata; 1e7 rows ≈ 0.5 GB):
-the sample bench data of examples/data repeated with times that continue, and the
-sample recording of the oscillator repeated (its cycle continues).  Each command runs
+a long bench log (the paper's protocol run again and again with new noise) and a fast
+logger's recording (the 30 s sample recording of examples/data at 2e6 samples).  Each command runs
 in its own process under ``/usr/bin/time -v`` (peak resident memory) with the default
 row caps (``--max-rows``): the file is streamed and thinned evenly with a notice.
 """
@@ -17,28 +17,44 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 ROOT = Path(__file__).resolve().parents[1]
 SAMPLES = ROOT / "examples" / "data"
 
 
-def repeated(sample: Path, rows: int, path: Path, period: float) -> Path:
-    """``sample`` repeated until ``rows`` data rows, time shifted by ``period`` per copy."""
+def bench_file(rows: int, path: Path) -> Path:
+    """A long bench log: the paper's protocol on the axi valve run again and again
+    (seed k for run k, times continuing), cut at ``rows`` data rows."""
+    from pneunet.identify import simulate_bench
+    from pneunet.valve_params import PAPER_VALVES
+
     if path.exists():
         return path
-    base = pd.read_csv(sample, comment="#")
-    block = max(1, 200_000 // len(base))
+    columns = ["time_s", "p_in_kPa", "p_out_kPa", "p_ctrl_kPa", "mdot_mg_s", "sweep"]
+    with path.open("w") as fh:
+        fh.write(",".join(columns) + "\n")
+        written, seed, t0 = 0, 0, 0.0
+        while written < rows:
+            run = simulate_bench(PAPER_VALVES["axi"], seed=seed, include_truth=False)[columns]
+            run = run.assign(time_s=run.time_s + t0).iloc[:rows - written]
+            run.to_csv(fh, header=False, index=False, float_format="%.4f")
+            written, seed, t0 = written + len(run), seed + 1, float(run.time_s.iloc[-1]) + 5
+    return path
+
+
+def trace_file(rows: int, path: Path) -> Path:
+    """A fast logger: the 30 s sample recording interpolated to ``rows`` samples."""
+    if path.exists():
+        return path
+    base = pd.read_csv(SAMPLES / "oscillator_rec.csv", comment="#")
+    t = np.linspace(0.0, float(base.time_s.iloc[-1]), rows)
     with path.open("w") as fh:
         fh.write(",".join(base.columns) + "\n")
-        written, copy = 0, 0
-        while written < rows:
-            chunk = pd.concat([base.assign(time_s=base.time_s + (copy + k) * period)
-                               for k in range(block)], ignore_index=True)
-            chunk = chunk.iloc[:rows - written]
-            chunk.to_csv(fh, header=False, index=False, float_format="%.4f")
-            written += len(chunk)
-            copy += block
+        for part in np.array_split(np.arange(rows), max(1, rows // 200_000)):
+            frame = pd.DataFrame({c: np.interp(t[part], base.time_s, base[c]) for c in base})
+            frame.to_csv(fh, header=False, index=False, float_format="%.6f")
     return path
 
 
@@ -61,14 +77,13 @@ def main() -> None:
     args = ap.parse_args()
     out = Path(args.dir)
     out.mkdir(parents=True, exist_ok=True)
-    bench_period = float(pd.read_csv(SAMPLES / "bench_axi.csv", comment="#").time_s.iloc[-1]) + 5
     runs = []
     for n in args.rows:
-        path = repeated(SAMPLES / "bench_axi.csv", n, out / f"bench_{n}.csv", bench_period)
+        path = bench_file(n, out / f"bench_{n}.csv")
         runs.append((f"fit, {n:,} bench rows ({path.stat().st_size / 1e6:.0f} MB)",
                      ["fit", str(path), "--bootstrap", "10"]))
     for n in args.trace_rows:
-        path = repeated(SAMPLES / "oscillator_rec.csv", n, out / f"trace_{n}.csv", 30.05)
+        path = trace_file(n, out / f"trace_{n}.csv")
         runs.append((f"fit-trace, {n:,} samples ({path.stat().st_size / 1e6:.0f} MB)",
                      ["fit-trace", str(path), str(ROOT / "netlists" / "oscillator.pn"),
                       "--fit", "Rout=1.4:0.3:5", "--max-nfev", "4", "--no-progress"]))
