@@ -15,7 +15,8 @@ import pandas as pd
 from ..errors import DataError
 from ..valve_params import PAPER_VALVES, ValveParams
 from .data import PRESSURES, as_frame
-from .fit import NAMES, inverse_resistance, plane_to_params, smooth_svm
+from .fit import NAMES, inverse_resistance
+from .separation import plane_to_params, smooth_svm
 
 
 @dataclass
@@ -64,7 +65,7 @@ def areas_vs_threshold(fit, thresholds=None, *, n=12) -> pd.DataFrame:
     linear SVM gives ã_in, ã_out and p̃_sep and its misclassified fraction; a second
     classifier keeps the fit's a_in, a_out and only adapts the offset (best
     p_sep by a scan) — the paper's red line in Fig. 8B.  The planes come from the
-    smoothed-hinge solver (:func:`~pneunet.identify.fit.smooth_svm`, same problem to
+    smoothed-hinge solver (:func:`~pneunet.identify.separation.smooth_svm`, same problem to
     O(0.05) margin units): near 1/R_f the classes stop being separable and libsvm
     then needs tens of seconds per threshold.  Columns: ``inv_r_sep,
     ain, aout, psep, misclassified, misclassified_fixed, n_above``.
