@@ -32,6 +32,19 @@ def test_sites_cover_the_lines_where_a_tube_is_not_a_dead_volume():
     assert "tube@X1.out" not in names and "tube@Rout.a" not in names
 
 
+def test_after_heat_exchange_no_dead_volume_is_offered_at_its_links():
+    """The tank with its energy balance gets a thermal_inlet per line: the link nodes sit
+    at the tank's pressure, so a dead volume there is more tank, not a new site."""
+    c = oscillator({"V": 50.0})
+    heat = next(e for e in candidates_for(c) if e.name == "volume_heat_transfer")
+    heat.apply(c, {"tau": 0.3})
+    links = {s.nodes[0] for s in c.elements.values() if s.kind == "thermal_inlet"}
+    assert len(links) == 2
+    sites = {e.name for e in candidates_for(c) if e.family == "dead volume"}
+    assert "dead_volume@out" in sites
+    assert not {f"dead_volume@{n}" for n in links} & sites
+
+
 def test_an_effect_without_apply_cannot_be_made():
     class Nothing(CircuitEffect):
         name = "nothing"
