@@ -167,14 +167,10 @@ def _solve(jac, scale, dtau, rate):
 def _lu_pivots(jac):
     """Diagonal of U in an LU factorisation of ``jac`` (dense or CSC)."""
     if isinstance(jac, np.ndarray):
-        import warnings
+        from scipy.linalg.lapack import dgetrf
 
-        from scipy.linalg import lu_factor
-
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")  # an exactly singular block has a zero pivot
-            lu, _ = lu_factor(jac, check_finite=False)
-        return np.diag(lu)
+        lu, _, _ = dgetrf(jac)  # LAPACK directly: an exactly singular block has a zero
+        return np.diag(lu)      # pivot, without lu_factor's warning (and its filter's cost)
     from scipy.sparse.linalg import splu
 
     try:
