@@ -26,7 +26,7 @@ def _load_builtins() -> None:
     if _LOADED:
         return
     _LOADED = True
-    from . import resistors, sources, thermal, valves, volumes  # noqa: F401  (they register)
+    from . import check_valves, resistors, sources, thermal, valves, volumes  # noqa: F401
     from importlib.metadata import entry_points
 
     for ep in entry_points(group="pneunet.elements"):

@@ -138,6 +138,12 @@ class Circuit:
         """Membrane valve; ``model`` is a ValveParams, a paper valve name or a flow model."""
         return self.add("valve", name, (inlet, outlet, ctrl), model=model, backward=backward, **kw)
 
+    def check_valve(self, name, a, b, R, pcrack=None, width=None, Rleak=None, **kw):
+        """Check valve a→b: open resistance ``R``, cracking pressure ``pcrack`` and opening
+        range ``width`` (kPa), leak resistance ``Rleak`` when closed (default: none)."""
+        return self.add("check_valve", name, (a, b), R=R, pcrack=pcrack, width=width,
+                        Rleak=Rleak, **kw)
+
     def set_initial(self, node: str, pressure) -> None:
         """Initial pressure of a node (netlist ``.ic``), kPa or a string with unit."""
         self.initial[node] = self._number(pressure, "pressure", f"initial pressure of {node}",

@@ -415,7 +415,7 @@ class _Builder(ModelCards, AnalysisStatements, MeasureStatements):
         try:
             spec.check(value, label, key)
         except PneunetError as err:
-            raise _err(err.message, item, err.hint) from None
+            raise _err(f"{family.kind} {full}: {err.message}", item, err.hint) from None
         return value
 
     def _waveform(self, call: Call, slot, scope, label):

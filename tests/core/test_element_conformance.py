@@ -103,10 +103,22 @@ def _valve():
     return c, None, dict(kind="valve", nodes=("a", "b", "c"), model="no_such_valve")
 
 
+def _check_valve():
+    c = Circuit("check valve", ambient=100.0)
+    c.pressure_source("P1", "a", 400.0)
+    c.check_valve("D1", "a", "b", R=1.0, pcrack=10.0, width=5.0)  # fills until it reseats
+    c.volume("V1", "b", V=30.0)
+    c.check_valve("D2", "c", "a", R=1.0, pcrack=20.0, width=100.0, Rleak=10.0)  # leaks back
+    c.volume("V2", "c", V=30.0)
+    return c, {"b": 390.0, "c": 400.0}, dict(kind="check_valve", nodes=("a", "b"), R=1.0,
+                                            Rleak=0.5)
+
+
 CASES = {"pressure_source": _pressure_source, "flow_source": _flow_source,
          "resistor": _resistor, "pipe": _pipe, "volume": _volume, "actuator": _actuator,
          "valve": _valve, "thermal_volume": _thermal_volume,
-         "thermal_chamber": _thermal_chamber, "thermal_inlet": _thermal_chamber}
+         "thermal_chamber": _thermal_chamber, "thermal_inlet": _thermal_chamber,
+         "check_valve": _check_valve}
 
 
 def test_every_registered_family_has_a_conformance_case():
