@@ -233,8 +233,12 @@ def _decode(data: bytes, source, first_line: int) -> str:
 
 
 def _header(text: str, source, line: int) -> list[str]:
-    names = [c.strip() for c in next(csv.reader([text.rstrip("\r")]))]
     where = _at(source, line)
+    try:
+        names = [c.strip() for c in next(csv.reader([text.rstrip("\r")]))]
+    except csv.Error as err:  # a bare carriage return inside the line
+        raise DataError(f"cannot read the header: {err}", where=where,
+                        hint="one header line of comma-separated names") from None
     if len(names) == 1 and any(sep in names[0] for sep in (";", "\t")):
         sep = "semicolons" if ";" in names[0] else "tabs"
         raise DataError(f"the header is separated by {sep}, not commas", where=where,
