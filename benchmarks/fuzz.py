@@ -66,7 +66,7 @@ def _netlist_seeds() -> list:
 def _read_netlist(path: Path) -> None:
     from pneunet.netlist import parse_file
 
-    parse_file(path).circuit.validate()
+    parse_file(path).validate()
 
 
 register(Target("netlist", _netlist_seeds, _read_netlist, ".pn"))

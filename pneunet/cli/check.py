@@ -19,7 +19,7 @@ def main(args) -> int:
     from ..netlist import parse_file
 
     deck = parse_file(args.netlist, **netlist_args.parse_options(args))
-    deck.circuit.validate()
+    deck.validate()
     netlist_args.check_nodes(deck.circuit, args.strict)
     print(f"{args.netlist}: ok")
     print(deck.circuit.summary())

@@ -62,7 +62,7 @@ def main(args) -> int:
 
     path = Path(args.netlist)
     deck = parse_file(path, **netlist_args.parse_options(args))
-    deck.circuit.validate()
+    deck.validate()
     netlist_args.check_nodes(deck.circuit, args.strict)
     points = deck.step_points()
     out_dir = Path(args.output) if args.output else Path.cwd() / f"{path.stem}_results"
@@ -81,7 +81,7 @@ def main(args) -> int:
     for i, point in enumerate(points, 1):
         d = deck.variant(point) if point else deck
         if point:
-            d.circuit.validate()
+            d.validate()
             say("step " + str(i) + ": " + ", ".join(f"{k}={v:g}" for k, v in point.items()))
         tag = f"_step{i}" if point else ""
         res = RunResult(d)

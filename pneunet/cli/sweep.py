@@ -82,7 +82,7 @@ def main(args) -> int:
         parse = netlist_args.parse_options(args)
         build = S.NetlistBuilder(args.netlist, parse=parse)
         deck = build.deck()
-        deck.circuit.validate()
+        deck.validate()
         netlist_args.check_nodes(deck.circuit, args.strict)
         has_meas = bool(deck.measures)
         from ..netlist.runner import measure_unit

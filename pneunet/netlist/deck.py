@@ -109,6 +109,18 @@ class Deck(Summarized):
             rows.append(("step points", str(len(self.step_points()))))
         return repr(self.file), rows, ".circuit, .analyses, .measures, .variant(point)"
 
+    def validate(self) -> None:
+        """``circuit.validate()``; an error about the whole circuit ("no node has a defined
+        pressure") is placed in the netlist's file."""
+        from ..errors import PneunetError
+
+        try:
+            self.circuit.validate()
+        except PneunetError as err:
+            if err.where is not None or err.span is not None:
+                raise
+            raise type(err)(err.message, where=self.file, hint=err.hint) from None
+
     def step_points(self) -> list[dict]:
         """All combinations of the ``.step`` values ([{}] without ``.step``)."""
         if not self.steps:

@@ -133,3 +133,10 @@ def test_the_netlist_argument_itself_may_not_be_a_device_or_a_folder(target, tmp
     assert time.perf_counter() - start < 5
     assert err.startswith(f"{path}: error: ")
     assert ("not a regular file" in err) != (target == "missing.pn")
+
+
+def test_an_error_about_the_whole_circuit_names_the_file(tmp_path, capsys):
+    path = tmp_path / "float.pn"
+    path.write_text("R1 a b 1\nV1 a 10mL\n")
+    assert main(["check", str(path)]) == 2
+    assert capsys.readouterr().err.startswith(f"{path}: error: no node has a defined pressure")

@@ -26,7 +26,7 @@ def test_corpus_is_large_enough():
 def test_error_line_column(path, opened_files):
     """The error, its place and its caret; nothing opened outside the corpus folder."""
     line, column, text = expectation(path)
-    opened, err = opened_files(lambda: parse_file(path).circuit.validate())
+    opened, err = opened_files(lambda: parse_file(path).validate())
     assert all(p.startswith(str(path.parent.resolve())) for p in opened), opened
     assert isinstance(err, NetlistError), f"{type(err).__name__}: {err}"
     assert err.span is not None
