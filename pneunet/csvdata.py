@@ -88,12 +88,6 @@ class CsvFile:
         self.header_line = number
         self.columns = _header(text, self.source, number)
 
-    def require(self, names, *, hint: str = "") -> None:
-        """DataError naming the first of ``names`` not in the header (with a did-you-mean)."""
-        for name in names:
-            if name not in self.columns:
-                raise missing_column(self.source, name, self.columns, hint)
-
     def read(self, numeric=(), *, max_rows: int | None = None, what: str = "rows") -> Table:
         """All data rows, ``numeric`` columns as float; more than ``max_rows`` rows are
         thinned to every ``stride``-th row (stride a power of two) with a notice."""
