@@ -14,7 +14,8 @@ import sys
 import warnings
 
 #: sub-command modules, in the order ``pneunet --help`` lists them
-SUBCOMMAND_MODULES = ("run", "check", "fit", "diagnose", "sweep", "branches", "fit_trace")
+SUBCOMMAND_MODULES = ("run", "check", "fit", "diagnose", "sweep", "branches", "fit_trace",
+                       "design")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -1,0 +1,28 @@
+"""``--dask ADDRESS|local``: the executor of commands that run on the sweep machinery."""
+from __future__ import annotations
+
+import contextlib
+
+
+@contextlib.contextmanager
+def dask_or_local(address: str | None, workers: int | None):
+    """A ``dask.distributed`` client (``'local'``: a LocalCluster of ``workers`` processes,
+    default 2) closed on exit, or None (run_sweep's local process pool)."""
+    if not address:
+        yield None
+        return
+    from distributed import Client, LocalCluster
+
+    cluster = None
+    if address == "local":
+        cluster = LocalCluster(n_workers=workers or 2, threads_per_worker=1,
+                               dashboard_address=None)
+        client = Client(cluster)
+    else:
+        client = Client(address)
+    try:
+        yield client
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()

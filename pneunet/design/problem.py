@@ -1,0 +1,102 @@
+"""A design problem: circuit builder, targets and the shared simulation runner.
+
+:class:`Problem` reads a netlist (or takes a Python builder), turns target strings into
+:class:`~pneunet.design.spec.Target` objects with the netlist's ``.meas`` units, checks
+that every parameter name exists before anything is simulated, and evaluates batches of
+points on the sweep machinery (:func:`~pneunet.analysis.sweep.run_sweep`) with one process
+pool (or dask client) for the whole design, counting the simulations.
+"""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+from ..analysis import sweep as S
+from .metrics import SpecMeasure
+from .spec import Target, parse_target
+
+
+class Problem:
+    """``build``: a netlist path, a :class:`NetlistBuilder` or a picklable
+    ``build(point) -> Circuit``; ``targets``: strings or Targets; ``fixed``: parameter
+    values set at every point; ``workers``/``executor``: as for ``run_sweep``."""
+
+    def __init__(self, build, targets, *, node: str | None = None, t_stop: float | None = None,
+                 fixed: dict | None = None, workers: int | None = None, executor=None,
+                 progress: bool = False):
+        if isinstance(build, (str, Path)):
+            build = S.NetlistBuilder(build)
+        S.require_builder(build, "design")
+        self.build, self.fixed = build, dict(fixed or {})
+        measures, ambient = {}, 96.0
+        if isinstance(build, S.NetlistBuilder):
+            from ..netlist.runner import measure_unit
+
+            deck = build.deck()
+            measures = {m.name: measure_unit(m) for m in deck.measures}
+            ambient = deck.circuit.options.ambient
+        self.targets = [t if isinstance(t, Target) else parse_target(t, measures, ambient)
+                        for t in targets]
+        if not self.targets:
+            from ..errors import ParameterError
+
+            raise ParameterError("no target given", hint="e.g. --target period=3s")
+        self.analysis = SpecMeasure(self.targets, build if isinstance(build, S.NetlistBuilder)
+                                    else None, node=node, t_stop=t_stop)
+        self.workers, self.executor, self.progress = workers, executor, progress
+        self._pool = None
+        self.simulations = self.failed = 0
+        self._cache: dict = {}
+
+    def check(self, point: dict) -> None:
+        """Every name of ``point`` exists (did-you-mean otherwise), before simulating."""
+        S.check_points(self.build, [dict(self.fixed, **point)])
+
+    def __enter__(self):
+        import os
+
+        from ..workers import process_pool
+
+        if self.executor is None and (self.workers or os.cpu_count() or 1) > 1:
+            self._pool = process_pool(self.workers or os.cpu_count() or 1)
+        return self
+
+    def __exit__(self, kind, *rest):
+        if self._pool is not None:
+            if kind is None:
+                self._pool.shutdown(wait=True)
+            else:
+                from ..workers import stop
+
+                stop(self._pool)
+            self._pool = None
+
+    def evaluate(self, points: list[dict], desc: str = "design") -> list[dict]:
+        """Records (``params``, ``result``, ``error``) of ``points`` in order; a point
+        evaluated before comes from the cache."""
+        full = [dict(self.fixed, **p) for p in points]
+        keys = [S.point_key(p) for p in full]
+        todo = list({k: p for k, p in zip(keys, full) if k not in self._cache}.items())
+        if todo:
+            executor = self.executor or self._pool
+            result = S.run_sweep(self.build, [p for _, p in todo], self.analysis,
+                                 executor=executor, workers=1 if executor is None else None,
+                                 progress=self.progress and len(todo) > 1)
+            rows = result.table.to_dict(orient="records")
+            for (k, p), row in zip(todo, rows):
+                self._cache[k] = row
+            self.simulations += len(todo)
+            self.failed += result.failed
+        return [self._cache[k] for k in keys]
+
+    def metrics(self, row: dict) -> dict:
+        """``{target key: value}`` of an evaluated row (NaN where not measured)."""
+        out = {}
+        for t in self.targets:
+            v = row.get(t.key)
+            out[t.key] = float(v) if v is not None and row.get("error") is None \
+                and not (isinstance(v, float) and math.isnan(v)) else math.nan
+        return out
+
+    def met(self, metrics: dict) -> bool:
+        return all(t.met(metrics[t.key]) for t in self.targets)

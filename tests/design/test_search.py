@@ -1,0 +1,57 @@
+"""pneunet design: the chosen values, re-simulated independently, meet the targets."""
+import json
+
+import pytest
+
+from pneunet.cli import main
+from pneunet.design import design
+
+
+def resimulated_period(path, values):
+    """Period (s) of p(tank) over the second half of the netlist's transient, simulated
+    without the design machinery."""
+    from pneunet import measure
+    from pneunet.netlist import parse_file
+
+    sol = parse_file(path, overrides=values).circuit.tran(14.0)
+    return measure.period(sol.t, sol.pressure("tank"), t_from=7.0)
+
+
+def test_design_meets_period_when_resimulated(short_oscillator, capsys):
+    status = main(["design", str(short_oscillator), "--vary", "Rout=0.6:3",
+                   "--vary", "Rvent=1:10", "--target", "period=2s±0.1s",
+                   "--target", "swing>=120kPa", "--starts", "6", "--workers", "2", "--json"])
+    out = json.loads(capsys.readouterr().out)
+    assert status == 0 and out["met"]
+    assert set(out["values"]) == {"Rout", "Rvent"}
+    assert abs(resimulated_period(short_oscillator, out["values"]) - 2.0) <= 0.1
+    assert out["metrics"]["swing"] >= 120
+    assert out["simulations"] >= 6
+
+
+def test_unreachable_target_reports_closest_design_and_limiting_bound(short_oscillator):
+    # the period grows with R_vent (2.3 s at 2, 3.0 s at 3): it cannot reach 30 s
+    result = design(short_oscillator, {"Rvent": (2.0, 3.0)}, ["period=30s"], n_start=4,
+                    tries=1, max_nfev=4, workers=1)
+    assert not result.met
+    assert result.limiting == [{"parameter": "Rvent", "bound": "high", "value": 3.0}]
+    assert result.values["Rvent"] == pytest.approx(3.0)
+    row = result.targets[0]
+    assert row["miss"] == pytest.approx(abs(row["achieved"] - 30) - row["tolerance"])
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--vary", "Rout=3:0.6"], "empty, low 3 ≥ high 0.6"),
+    (["--vary", "Rout=-1:3"], "low end -1 is not positive"),
+    (["--vary", "Rot=0.6:3"], "did you mean 'Rout'?"),
+    (["--vary", "Vtnk.V=40:400"], "did you mean 'Vtank'?"),
+    (["--vary", "Rout=0.6:3", "--target", "perod=3s"], "did you mean 'period'?"),
+    (["--vary", "Rout=0.6:3", "--target", "period=3kPa"], "needs s, got kPa"),
+])
+def test_bad_input_is_exit_2_before_simulating(short_oscillator, capsys, args, message):
+    argv = ["design", str(short_oscillator), "--json"] + args
+    if "--target" not in args:
+        argv += ["--target", "period=3s"]
+    assert main(argv) == 2
+    captured = capsys.readouterr()
+    assert captured.out == "" and message in captured.err and "Traceback" not in captured.err
