@@ -32,6 +32,7 @@ SLOTS = {
     "time": "s",
     "temperature": "K",
     "frequency": "Hz",
+    "compliance": "mL/kPa",  # volume per pressure of an elastic volume
     "dimensionless": "",
 }
 
@@ -49,6 +50,7 @@ FAST_FACTORS = {
     ("mm", "length"): 1.0, ("cm", "length"): 10.0, ("m", "length"): 1e3, ("um", "length"): 1e-3,
     ("s", "time"): 1.0, ("ms", "time"): 1e-3, ("us", "time"): 1e-6, ("min", "time"): 60.0,
     ("K", "temperature"): 1.0, ("Hz", "frequency"): 1.0, ("kHz", "frequency"): 1e3,
+    ("mL/kPa", "compliance"): 1.0, ("mL/bar", "compliance"): 0.01,
 }
 
 GAUGE_UNITS = ("kPag", "barg", "psig", "Pag", "MPag", "mbarg", "hPag", "atmg")
@@ -146,6 +148,7 @@ _EXAMPLES = {
     "time": "5ms or 2s",
     "temperature": "293.15K or 20degC",
     "frequency": "2Hz",
+    "compliance": "0.1mL/kPa or 10mL/bar",
     "dimensionless": "1.5",
 }
 

@@ -17,6 +17,7 @@ nodes ``0``, ``gnd`` and ``atm`` are at the ambient pressure.
 from __future__ import annotations
 
 import difflib
+import os
 from typing import Any
 
 import numpy as np
@@ -86,6 +87,14 @@ class Circuit:
             value = params[key]
             if spec.kind == "object":
                 out[key] = value
+            elif spec.kind == "table" and isinstance(value, (str, os.PathLike)):
+                from ..tables import read_table
+
+                out[key] = read_table(value, family.table_slots, strict=True,
+                                      ambient_kpa=self.options.ambient,
+                                      gas=self.options.gas_model)
+            elif spec.kind == "table":
+                out[key] = value
             elif spec.kind == "waveform" and isinstance(value, Waveform):
                 out[key] = value
             else:
@@ -143,6 +152,16 @@ class Circuit:
         range ``width`` (kPa), leak resistance ``Rleak`` when closed (default: none)."""
         return self.add("check_valve", name, (a, b), R=R, pcrack=pcrack, width=width,
                         Rleak=Rleak, **kw)
+
+    def accumulator(self, name, node, V0, k, pref=None, p0=None, **kw):
+        """Elastic volume V = V0 + k·(p − pref): ``V0`` (mL) at ``pref`` (kPa, default
+        ambient), compliance ``k`` (mL/kPa), initial pressure ``p0``."""
+        return self.add("accumulator", name, (node,), V0=V0, k=k, pref=pref, p0=p0, **kw)
+
+    def pv_volume(self, name, node, table, p0=None, **kw):
+        """Elastic volume from a pressure–volume ``table``: (p kPa, V mL) arrays or a CSV file
+        (columns ``p_<unit>,V_<unit>``), interpolated by a monotone cubic (PCHIP)."""
+        return self.add("pv_volume", name, (node,), table=table, p0=p0, **kw)
 
     def set_initial(self, node: str, pressure) -> None:
         """Initial pressure of a node (netlist ``.ic``), kPa or a string with unit."""

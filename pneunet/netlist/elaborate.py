@@ -14,6 +14,7 @@ import re
 from ..errors import NetlistError, PneunetError, SourceSpan
 from .analyses import AnalysisStatements
 from .arrays import split_range
+from .datafiles import inline_table, read_data_file
 from .deck import Deck, Op
 from .expr import Scope, evaluate
 from .includes import KEYWORDS as INCLUDE_KEYWORDS
@@ -406,6 +407,12 @@ class _Builder(ModelCards, AnalysisStatements, MeasureStatements):
                     raise _err(f"{label} expects a model name", item)
                 return self._lookup_model(item)
             return item.text if isinstance(item, (Word, Str)) else str(item)
+        if spec.kind == "table" and isinstance(item, Call) and item.name.upper() == "TABLE":
+            return inline_table(item, family.table_slots,
+                                lambda a, slot: self._number(a, slot, label, scope))
+        if spec.kind == "table":
+            return read_data_file(item, self.source.policy, family.table_slots, self.options,
+                                  label, strict=True)
         if isinstance(item, Call) and spec.kind == "waveform":
             return self._waveform(item, spec.slot, scope, label)
         if isinstance(item, Call):

@@ -104,6 +104,9 @@ def print_circuit(circuit, *, header: bool = True) -> str:
                 continue
             if p.kind == "object":
                 parts.append(f"{key}={model_name(value)}")
+            elif p.kind == "table":
+                parts.append(f"{key}=TABLE(" + " ".join(f"{_num(a)} {_num(b)}"
+                                                        for a, b in zip(*value)) + ")")
             elif isinstance(value, Waveform):
                 parts.append(f"{key}={waveform_text(value)}")
             else:

@@ -29,6 +29,7 @@ class Source:
     top: list
     subckts: dict = field(default_factory=dict)
     limits: Limits = DEFAULT_LIMITS
+    policy: IncludePolicy | None = None  # also where data files (tables, recordings) may be
 
 
 def load(src: SourceText, policy: IncludePolicy | None = None,
@@ -87,4 +88,4 @@ def load(src: SourceText, policy: IncludePolicy | None = None,
             top.append(st)
     if stack:
         raise _err(f".subckt {stack[-1].name} has no .ends", stack[-1].span)
-    return Source(src.name, title, top, subckts, limits)
+    return Source(src.name, title, top, subckts, limits, policy)

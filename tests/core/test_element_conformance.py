@@ -114,11 +114,27 @@ def _check_valve():
                                             Rleak=0.5)
 
 
+def _accumulator():
+    c = Circuit("accumulator", ambient=100.0)
+    c.pressure_source("P1", "a", 250.0)
+    c.resistor("R1", "a", "b", R=1.0)
+    c.accumulator("A1", "b", V0=20.0, k=0.1, p0=150.0)
+    return c, {"b": 250.0}, dict(kind="accumulator", nodes=("b",), V0=10.0, k=-0.1)
+
+
+def _pv_volume():
+    c = Circuit("pv_volume", ambient=100.0)
+    c.pressure_source("P1", "a", 250.0)
+    c.resistor("R1", "a", "b", R=1.0)
+    c.pv_volume("A1", "b", table=([100.0, 180.0, 230.0, 300.0], [20.0, 24.0, 31.0, 33.0]))
+    return c, {"b": 250.0}, dict(kind="pv_volume", nodes=("b",), table=([100, 200], [20, 10]))
+
+
 CASES = {"pressure_source": _pressure_source, "flow_source": _flow_source,
          "resistor": _resistor, "pipe": _pipe, "volume": _volume, "actuator": _actuator,
          "valve": _valve, "thermal_volume": _thermal_volume,
          "thermal_chamber": _thermal_chamber, "thermal_inlet": _thermal_chamber,
-         "check_valve": _check_valve}
+         "check_valve": _check_valve, "accumulator": _accumulator, "pv_volume": _pv_volume}
 
 
 def test_every_registered_family_has_a_conformance_case():

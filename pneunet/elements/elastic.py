@@ -1,0 +1,131 @@
+"""Elastic volumes: gas in a volume that grows with its pressure, V(p), isothermal.
+
+The mass stored is m = ρ(p)·V(p) with ρ = p·M/(R·T), so the capacitance is
+
+    C(p) = dm/dp = (M/(R·T)) · (V(p) + p·V'(p))            [mg/kPa]
+
+(ρ·dV/dp plus V·dρ/dp).  ``accumulator``: V = V0 + k·(p − pref), valid while V > 0.
+``pv_volume``: V(p) from a table of (p, V) points (a measured curve; V must not decrease),
+interpolated by a monotone cubic (scipy's PchipInterpolator, C¹) and continued linearly
+with its end slopes outside the table.  Signal ``V_<name>`` is the volume, mL.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import ParameterError
+from . import register
+from .base import ElementFamily, Param
+
+_P0 = Param("pressure", "initial absolute pressure, kPa (default: ambient)", low=0.0,
+            low_inclusive=False, default=np.nan)
+
+
+class _ElasticVolume(ElementFamily):
+    """A volume V(p) at one node; subclasses give :meth:`volume` with two derivatives."""
+
+    ports = ("node",)
+    storage_ports = (0,)
+
+    def __init__(self, specs, context):
+        super().__init__(specs, context)
+        self._rho_per_p = context.gas.capacitance(1.0, context.options.temperature)  # mg/(kPa·mL)
+
+    def volume(self, p):
+        """V (mL), dV/dp (mL/kPa) and d²V/dp² of each instance at pressures p (..., n)."""
+        raise NotImplementedError
+
+    def capacitance(self, p):
+        """C(p) in mg/kPa and dC/dp, p (..., n)."""
+        v, dv, d2v = self.volume(p)
+        return self._rho_per_p * (v + p * dv), self._rho_per_p * (2.0 * dv + p * d2v)
+
+    def outflows(self, t, p, pdot):
+        c, dc = self.capacitance(p[:, 0])
+        rate = pdot[:, 0]
+        return (c * rate)[:, None], (dc * rate).reshape(self.n, 1, 1), c.reshape(self.n, 1, 1)
+
+    def flows(self, t, p, pdot):
+        return self.capacitance(p[..., 0])[0][..., None] * pdot
+
+    def initial_pressure(self):
+        return self.column("p0")
+
+    def signals(self, t, p):
+        return {"V": ("mL", self.volume(p[..., 0])[0])}
+
+
+@register
+class Accumulator(_ElasticVolume):
+    """Linear elastic volume V = V0 + k·(p − pref)."""
+
+    kind = "accumulator"
+    description = "elastic volume V = V0 + k·(p − pref) (isothermal gas)"
+    params = {
+        "V0": Param("volume", "volume at pref, mL", low=0.0, low_inclusive=False),
+        "k": Param("compliance", "compliance dV/dp, mL/kPa", low=0.0),
+        "pref": Param("pressure", "absolute pressure where V = V0, kPa (default: ambient)",
+                      low=0.0, low_inclusive=False, default=np.nan),
+        "p0": _P0,
+    }
+
+    def __init__(self, specs, context):
+        super().__init__(specs, context)
+        pref = self.column("pref")
+        self._pref = np.where(np.isnan(pref), context.options.ambient, pref)
+        self._v0, self._k = self.column("V0"), self.column("k")
+
+    def volume(self, p):
+        return self._v0 + self._k * (p - self._pref), self._k + 0.0 * p, 0.0 * p
+
+
+@register
+class PressureVolumeCurve(_ElasticVolume):
+    """Elastic volume whose V(p) is a table of measured points (monotone cubic)."""
+
+    kind = "pv_volume"
+    description = "elastic volume from a pressure–volume table (CSV p_kPa,V_mL; PCHIP)"
+    table_slots = ("pressure", "volume")
+    params = {
+        "table": Param("volume", "(p kPa, V mL) points, or a CSV file with columns "
+                       "<p>_<unit>,<V>_<unit>", kind="table"),
+        "p0": _P0,
+    }
+
+    @classmethod
+    def check_spec(cls, spec):
+        p, v = (np.asarray(x, dtype=float) for x in spec.params["table"])
+        problem = ("needs at least two points" if p.ndim != 1 or p.shape != v.shape or p.size < 2
+                   else "holds a value that is not finite" if not np.all(np.isfinite([p, v]))
+                   else "pressures must increase from point to point" if np.any(np.diff(p) <= 0)
+                   else "volumes must be > 0 and must not decrease with pressure"
+                   if v[0] <= 0 or np.any(np.diff(v) < 0) else None)
+        if problem:
+            raise ParameterError(f"the pressure–volume table {problem}", where=spec.where,
+                                 hint="a table of (p kPa, V mL) points, p increasing")
+        spec.params["table"] = (p, v)
+
+    def __init__(self, specs, context):
+        super().__init__(specs, context)
+        from scipy.interpolate import PchipInterpolator
+
+        self._curves = []
+        for spec in specs:
+            p, v = spec.params["table"]
+            curve = PchipInterpolator(p, v)
+            slope = curve.derivative()
+            self._curves.append((p[0], p[-1], curve, slope, slope.derivative(),
+                                 float(slope(p[0])), float(slope(p[-1]))))
+
+    def volume(self, p):
+        p = np.asarray(p, dtype=float)
+        out = np.empty((3,) + p.shape)
+        for i, (lo, hi, curve, slope, bend, slope_lo, slope_hi) in enumerate(self._curves):
+            x = p[..., i]
+            inside = np.clip(x, lo, hi)
+            end_slope = np.where(x < lo, slope_lo, slope_hi)
+            outside = (x < lo) | (x > hi)
+            out[0][..., i] = curve(inside) + np.where(outside, end_slope * (x - inside), 0.0)
+            out[1][..., i] = np.where(outside, end_slope, slope(inside))
+            out[2][..., i] = np.where(outside, 0.0, bend(inside))
+        return out[0], out[1], out[2]
