@@ -1,4 +1,4 @@
-"""Time functions for sources: constant, step, pulse, piecewise-linear, sine.
+"""Time functions for sources: constant, step, pulse, piecewise-linear, sine, any function.
 
 Each waveform gives ``value(t)`` (vectorised) in the unit of the source it drives
 (kPa for pressure sources, mg/s for flow sources), its ``breakpoints`` (times at
@@ -251,15 +251,64 @@ class Sine(Waveform):
         return "SIN(" + " ".join(_fmt(v) for v in vals) + ")"
 
 
+class Function(Waveform):
+    """Any Python function of time ``f(t)`` (t in s, a float) returning the source's value
+    in internal units (kPa absolute, mg/s).  Its corners are unknown to the solver unless
+    given: ``breakpoints`` (times where the value or its slope jumps; the solver steps onto
+    them) and ``jumps`` (those where the value jumps; the solver restarts there).  Without
+    them a fast change between two steps can be stepped over: give the corners, or bound
+    the step with the option ``max_step``."""
+
+    def __init__(self, function, breakpoints=(), jumps=()):
+        if not callable(function):
+            raise ParameterError(f"a function source needs a callable, got {function!r}")
+        self.function = function
+        self._breakpoints = np.unique(np.asarray([*breakpoints, *jumps], dtype=float))
+        self._jumps = np.unique(np.asarray(jumps, dtype=float))
+
+    def __repr__(self):
+        return f"Function({getattr(self.function, '__name__', self.function)!r})"
+
+    def _one(self, t):
+        value = self.function(float(t))
+        try:
+            value = float(value)
+        except (TypeError, ValueError):
+            raise ParameterError(f"function source {self!r} returned {value!r} at t={t:g} s, "
+                                 "not a number") from None
+        if not np.isfinite(value):
+            raise ParameterError(f"function source {self!r} returned {value} at t={t:g} s")
+        return value
+
+    def value(self, t):
+        if not np.ndim(t):
+            return self._one(t)
+        t = np.asarray(t, dtype=float)
+        return np.array([self._one(x) for x in t.ravel()]).reshape(t.shape)
+
+    def breakpoints(self, t_start, t_stop):
+        return _inside(self._breakpoints, t_start, t_stop)
+
+    def jumps(self, t_start, t_stop):
+        return _inside(self._jumps, t_start, t_stop)
+
+    def netlist(self) -> str:
+        raise ParameterError(f"function source {self!r} cannot be written as netlist text",
+                             hint="sample it into a PWL, or a CSV read by PWL(FILE=...)")
+
+
 def _inside(points, t_start, t_stop):
     points = np.asarray(points, dtype=float)
     return points[(points > t_start) & (points < t_stop)]
 
 
 def as_waveform(value) -> Waveform:
-    """A number becomes a :class:`Constant`; a waveform is returned as is."""
+    """A number becomes a :class:`Constant`, a function of time a :class:`Function`; a
+    waveform is returned as is."""
     if isinstance(value, Waveform):
         return value
+    if callable(value):
+        return Function(value)
     try:
         return Constant(float(value))
     except (TypeError, ValueError):

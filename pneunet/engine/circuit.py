@@ -95,8 +95,8 @@ class Circuit:
                                       gas=self.options.gas_model)
             elif spec.kind == "table":
                 out[key] = value
-            elif spec.kind == "waveform" and isinstance(value, Waveform):
-                out[key] = value
+            elif spec.kind == "waveform" and (isinstance(value, Waveform) or callable(value)):
+                out[key] = as_waveform(value)
             else:
                 number = self._number(value, spec.slot, f"{key}", where)
                 spec.check(number, where, key)
@@ -119,11 +119,13 @@ class Circuit:
 
     # -- convenience constructors (one per built-in family) -------------------------
     def pressure_source(self, name, node, value, **kw):
-        """Absolute pressure (kPa or a :mod:`~pneunet.waveforms` waveform) at ``node``."""
+        """Absolute pressure (kPa, a :mod:`~pneunet.waveforms` waveform or a function of
+        time t in s returning kPa) at ``node``."""
         return self.add("pressure_source", name, (node,), value=value, **kw)
 
     def flow_source(self, name, a, b, value, **kw):
-        """Mass flow (mg/s or a waveform) from node ``a`` to node ``b``."""
+        """Mass flow (mg/s, ``"40L/min"`` in normal litres at 0 °C and 101.325 kPa, a
+        waveform or a function of time returning mg/s) from node ``a`` to node ``b``."""
         return self.add("flow_source", name, (a, b), value=value, **kw)
 
     def resistor(self, name, a, b, R, **kw):

@@ -438,6 +438,11 @@ class _Builder(ModelCards, AnalysisStatements, MeasureStatements):
                               ("delay", "time"), ("damping", "frequency"),
                               ("phase", "dimensionless")], 3),
         }
+        if kind == "PWL" and len(call.args) == 1 and isinstance(call.args[0], Pair) and \
+                isinstance(call.args[0].key, Word) and call.args[0].key.text.lower() == "file":
+            times, values = read_data_file(call.args[0].value, self.source.policy,
+                                           ("time", slot), self.options, label, strict=False)
+            return wf.PiecewiseLinear(tuple(times), tuple(values))
         if kind == "PWL":
             args = call.args
             if any(isinstance(a, Pair) for a in args):
