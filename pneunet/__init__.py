@@ -17,6 +17,8 @@ _LAZY = {
     "transient": "pneunet.engine.simulate",
     "operating_point": "pneunet.engine.simulate",
     "Solution": "pneunet.engine.solution",
+    "save_run": "pneunet.runfile",
+    "read_run": "pneunet.runfile",
     "ValveParams": "pneunet.valve_params",
     "PAPER_VALVES": "pneunet.valve_params",
     "waveforms": "pneunet.waveforms",

@@ -141,7 +141,7 @@ class Solution(Summarized):
                                             "['solver_diagnostics'])"))
         return (repr(self.title) if self.title else "transient", rows,
                 "sol.pressure(node), sol.flow(element), sol.at(t), sol.final(), sol.stats, "
-                "sol.to_pandas(), sol.plot()")
+                "sol.to_pandas(), sol.plot(), sol.save(path)")
 
     def _signal_name(self, name: str) -> str:
         """A signal's name; a bare node or element name means its pressure or flow."""
@@ -186,6 +186,13 @@ class Solution(Summarized):
     def to_csv(self, path) -> None:
         """Write :meth:`table` as CSV (one row per time point)."""
         write_csv(path, self.table())
+
+    def save(self, path, circuit=None):
+        """The whole run in one file (``.json`` or ``.npz``) with ``circuit``'s netlist
+        and options; :func:`pneunet.read_run` loads it back (see :mod:`pneunet.runfile`)."""
+        from ..runfile import save_run
+
+        return save_run(path, self, circuit)
 
     def plot(self, path=None, signals=None):
         """Pressures (top) and flows (bottom) against time; traces with equal values are
