@@ -15,17 +15,15 @@ import numpy as np
 
 from ..errors import ParameterError
 from . import register
-from .base import ElementFamily, Param
+from .base import Param
+from .volumes import StorageNode
 
 _P0 = Param("pressure", "initial absolute pressure, kPa (default: ambient)", low=0.0,
             low_inclusive=False, default=np.nan)
 
 
-class _ElasticVolume(ElementFamily):
+class _ElasticVolume(StorageNode):
     """A volume V(p) at one node; subclasses give :meth:`volume` with two derivatives."""
-
-    ports = ("node",)
-    storage_ports = (0,)
 
     def __init__(self, specs, context):
         super().__init__(specs, context)
@@ -36,20 +34,8 @@ class _ElasticVolume(ElementFamily):
         raise NotImplementedError
 
     def capacitance(self, p):
-        """C(p) in mg/kPa and dC/dp, p (..., n)."""
         v, dv, d2v = self.volume(p)
         return self._rho_per_p * (v + p * dv), self._rho_per_p * (2.0 * dv + p * d2v)
-
-    def outflows(self, t, p, pdot):
-        c, dc = self.capacitance(p[:, 0])
-        rate = pdot[:, 0]
-        return (c * rate)[:, None], (dc * rate).reshape(self.n, 1, 1), c.reshape(self.n, 1, 1)
-
-    def flows(self, t, p, pdot):
-        return self.capacitance(p[..., 0])[0][..., None] * pdot
-
-    def initial_pressure(self):
-        return self.column("p0")
 
     def signals(self, t, p):
         return {"V": ("mL", self.volume(p[..., 0])[0])}

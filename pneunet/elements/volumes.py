@@ -17,15 +17,36 @@ from . import register
 from .base import ElementFamily, Param
 
 
+class StorageNode(ElementFamily):
+    """Mass stored at one node through a capacitance: outflow C(p)·ṗ (subclasses give
+    :meth:`capacitance`) and an initial pressure ``p0``."""
+
+    ports = ("node",)
+    storage_ports = (0,)
+
+    def capacitance(self, p):
+        """C(p) in mg/kPa and dC/dp, for pressures p (..., n)."""
+        raise NotImplementedError
+
+    def outflows(self, t, p, pdot):
+        c, dc = self.capacitance(p[:, 0])  # c (n,), dc (n,) or 0
+        rate = pdot[:, 0]
+        return (c * rate)[:, None], (dc * rate).reshape(self.n, 1, 1), c.reshape(self.n, 1, 1)
+
+    def flows(self, t, p, pdot):
+        return self.capacitance(p[..., 0])[0][..., None] * pdot
+
+    def initial_pressure(self):
+        return self.column("p0")
+
+
 @register
-class Volume(ElementFamily):
+class Volume(StorageNode):
     """A rigid volume at one node: outflow C(p)·ṗ stores mass."""
 
     kind = "volume"
     aliases = ("V", "C")
     description = "rigid gas volume (isothermal or polytropic)"
-    ports = ("node",)
-    storage_ports = (0,)
     params = {
         "V": Param("volume", "volume, mL", low=0.0, low_inclusive=False),
         "n": Param("dimensionless", "polytropic exponent (1 isothermal, 1.4 adiabatic air)",
@@ -55,17 +76,6 @@ class Volume(ElementFamily):
         expo = 1.0 / self._n - 1.0
         c = self._c0 * ratio ** expo
         return c, c * expo / (ratio * self._p_ref)
-
-    def outflows(self, t, p, pdot):
-        c, dc = self.capacitance(p[:, 0])  # c (n,), dc (n,) or 0
-        rate = pdot[:, 0]
-        return (c * rate)[:, None], (dc * rate).reshape(self.n, 1, 1), c.reshape(self.n, 1, 1)
-
-    def flows(self, t, p, pdot):
-        return self.capacitance(p[..., 0])[0][..., None] * pdot
-
-    def initial_pressure(self):
-        return self.column("p0")
 
 
 @register
