@@ -152,15 +152,18 @@ def _convert_units(frame, source, units, gauge, gauge_cols, ambient_kpa) -> None
         raise DataError(f"{what} need the ambient (barometric) pressure",
                         hint="pass ambient_kpa (CLI --ambient), e.g. 96 kPa at 480 m as in "
                              "the paper, 101.325 kPa at sea level", where=source)
-    try:
-        for column in PRESSURES:
-            frame[column] = to_internal(frame[column].to_numpy(), _unit_for(column, units) or "kPa",
-                                        "pressure", gauge=gauge or column in gauge_cols,
-                                        ambient_kpa=ambient_kpa or 0.0, name=column)
-        for column, slot in (("mdot_mg_s", "flow"), ("time_s", "time")):
-            unit = _unit_for(column, units)
-            if unit:
-                frame[column] = to_internal(frame[column].to_numpy(), unit, slot, name=column)
+    try:  # a value that overflows becomes inf, which the row checks report
+        with np.errstate(over="ignore"):
+            for column in PRESSURES:
+                frame[column] = to_internal(frame[column].to_numpy(),
+                                            _unit_for(column, units) or "kPa", "pressure",
+                                            gauge=gauge or column in gauge_cols,
+                                            ambient_kpa=ambient_kpa or 0.0, name=column)
+            for column, slot in (("mdot_mg_s", "flow"), ("time_s", "time")):
+                unit = _unit_for(column, units)
+                if unit:
+                    frame[column] = to_internal(frame[column].to_numpy(), unit, slot,
+                                                name=column)
     except ParameterError as exc:
         raise DataError(exc.message, where=source, hint=exc.hint) from None
 

@@ -129,8 +129,9 @@ def _convert(df, units, where) -> None:
 
     for c, cu in units.items():
         if not cu.is_canonical:
-            try:
-                df[c] = to_internal(df[c].to_numpy(), cu.pint_unit, cu.kind, name=c)
+            try:  # a value that overflows becomes inf, which _check_values reports
+                with np.errstate(over="ignore"):
+                    df[c] = to_internal(df[c].to_numpy(), cu.pint_unit, cu.kind, name=c)
             except ParameterError as err:
                 raise DataError(err.message, where=where, hint=err.hint) from None
 
