@@ -65,7 +65,7 @@ def read_trace(path_or_frame, signals=None, *, max_rows: int | None = TRACE_MAX_
         notes.extend(table.notes)
         df = table.frame.rename(columns=rename)[["row", "line"] + wanted]
     _convert(df, units, where)
-    _check_values(df, wanted, where)
+    _check_values(df, wanted, where, {new: old for old, new in rename.items()})
     t = df["time_s"].to_numpy()
     if t[0] != 0:
         notes.append(f"time_s starts at {t[0]:g} s: shifted to start at 0 (the simulation "
@@ -136,8 +136,9 @@ def _convert(df, units, where) -> None:
                 raise DataError(err.message, where=where, hint=err.hint) from None
 
 
-def _check_values(df, columns, where) -> None:
-    """NaN/inf cells, too few rows, times that do not increase: DataError at the line."""
+def _check_values(df, columns, where, names) -> None:
+    """NaN/inf cells, too few rows, times that do not increase: DataError at the line
+    naming the column as the file does (``names``: canonical -> file name)."""
     at = "line" if "line" in df else "row"
 
     def place(i):
@@ -147,8 +148,8 @@ def _check_values(df, columns, where) -> None:
     if column is not None:
         i = np.flatnonzero(bad)
         more = f" and {i.size - 1} more" if i.size > 1 else ""
-        raise DataError(f"column {column} has a missing, NaN or infinite value at {place(i[0])}"
-                        f"{more}", where=where,
+        raise DataError(f"column {names.get(column, column)} has a missing, NaN or infinite "
+                        f"value at {place(i[0])}{more}", where=where,
                         hint="remove those rows, or fill them (e.g. interpolate) before fitting")
     t = df["time_s"].to_numpy()
     if len(t) < 5:
