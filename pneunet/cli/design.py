@@ -39,6 +39,21 @@ def register(subparsers) -> None:
                    help="local worker processes (default: all cores; 1 = no pool)")
     p.add_argument("--dask", metavar="ADDRESS", default=None,
                    help="run on a dask.distributed scheduler (ADDRESS or 'local')")
+    y = p.add_argument_group("yield under manufacturing spread")
+    y.add_argument("--yield", dest="n_yield", type=int, default=0, metavar="N",
+                   help="Monte Carlo samples of the spread at the design (or, without "
+                        "--vary, at the netlist's values): yield with its standard error, "
+                        "sensitivities")
+    y.add_argument("--tolerance", action="append", default=[], metavar="NAME=±X",
+                   help="a stated spread, e.g. X1.pclose=±5kPa or X1.e=±5%%; repeatable")
+    y.add_argument("--tolerance-dist", choices=["uniform", "normal"], default="uniform",
+                   help="uniform over ±X (default) or normal with ±X as ±2σ")
+    y.add_argument("--fit", action="append", default=[], metavar="ELEMENT=FIT.json",
+                   help="a valve's fitted covariance from 'pneunet fit DATA.csv --json', "
+                        "centred on the netlist's values, e.g. X1=fit.json")
+    y.add_argument("--tornado", metavar="PNG", default=None, help="write the tornado plot")
+    y.add_argument("--samples", metavar="CSV", default=None,
+                   help="write the yield samples (parameters, metrics, pass)")
     p.add_argument("--json", action="store_true", help="print the result as JSON only")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--quiet", "-q", action="store_true",
@@ -48,25 +63,72 @@ def register(subparsers) -> None:
 
 
 def main(args) -> int:
+    from ..analysis.store import check_writable
     from ..analysis.sweep import NetlistBuilder
-    from ..design.search import design
-    from ..design.spec import parse_range
+    from ..design.problem import Problem
+    from ..design.search import design, evaluate
+    from ..design.spec import parse_range, parse_tolerance
+    from ..design.spread import combined, no_uncertainty, spread_hint
+    from ..design.yields import yield_analysis
     from ..errors import ParameterError
     from .executors import dask_or_local
 
     ranges = [parse_range(text) for text in args.vary]
-    if not ranges:
-        raise ParameterError("no parameter to vary", hint="e.g. --vary Rout=0.6:3")
+    tolerances = [parse_tolerance(text) for text in args.tolerance]
+    fits = [_element_file(text) for text in args.fit]
+    if not ranges and not args.n_yield:
+        raise ParameterError("nothing to do", hint="--vary NAME=LOW:HIGH to design, "
+                                                   "--yield N for the yield under spread")
     if not args.target:
         raise ParameterError("no target given", hint="e.g. --target period=3s")
+    if (tolerances or fits) and not args.n_yield:
+        raise ParameterError("--tolerance/--fit need --yield N (Monte Carlo samples)")
+    for path, what in ((args.tornado, "tornado plot"), (args.samples, "samples table")):
+        if path:
+            check_writable(path, what, "choose a writable file")
     build = NetlistBuilder(args.netlist, parse=netlist_args.parse_options(args))
     progress = not (args.no_progress or args.json or args.quiet)
     with dask_or_local(args.dask, args.workers) as executor:
-        result = design(build, ranges, args.target, n_start=args.starts,
-                        max_nfev=args.max_evaluations, seed=args.seed, node=args.node,
-                        workers=args.workers, executor=executor, progress=progress)
+        problem = Problem(build, args.target, node=args.node, workers=args.workers,
+                          executor=executor, progress=progress)
+        if args.n_yield and not (tolerances or fits):
+            raise ParameterError(no_uncertainty(build), hint=spread_hint())
+        with problem:
+            if ranges:
+                result = design(problem, ranges, n_start=args.starts,
+                                max_nfev=args.max_evaluations, seed=args.seed)
+            else:
+                result = evaluate(problem)
+            out = result.to_json()
+            if args.n_yield:
+                spread = combined(problem, result.values, tolerances, fits,
+                                  args.tolerance_dist)
+                y = yield_analysis(problem, result.values, spread, args.n_yield, args.seed,
+                                   nominal=result.metrics)
+        if args.n_yield:
+            out["yield"] = y.to_json()
+            if args.tornado:
+                out["yield"]["tornado"] = str(y.plot_tornado(args.tornado))
+            if args.samples:
+                y.samples.to_csv(args.samples, index=False)
+                out["yield"]["samples"] = args.samples
     if args.json:
-        print(json.dumps(result.to_json(), indent=1))
+        print(json.dumps(out, indent=1))
     else:
         print(result.report())
+        if args.n_yield:
+            print(y.report())
+            for key in ("tornado", "samples"):
+                if key in out["yield"]:
+                    print(f"{key} -> {out['yield'][key]}")
     return 0 if result.met else 1
+
+
+def _element_file(text: str) -> tuple:
+    from ..errors import ParameterError
+
+    element, eq, path = text.partition("=")
+    if not eq or not element.strip() or not path.strip():
+        raise ParameterError(f"cannot read --fit {text!r}", hint="ELEMENT=FIT.json, e.g. "
+                             "X1=fit.json (from pneunet fit DATA.csv --json > fit.json)")
+    return element.strip(), path.strip()

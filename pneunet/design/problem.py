@@ -44,7 +44,7 @@ class Problem:
         self.analysis = SpecMeasure(self.targets, build if isinstance(build, S.NetlistBuilder)
                                     else None, node=node, t_stop=t_stop)
         self.workers, self.executor, self.progress = workers, executor, progress
-        self._pool = None
+        self._pool, self._depth = None, 0
         self.simulations = self.failed = 0
         self._cache: dict = {}
 
@@ -53,16 +53,20 @@ class Problem:
         S.check_points(self.build, [dict(self.fixed, **point)])
 
     def __enter__(self):
+        """One process pool for every batch until the outermost ``with`` ends."""
         import os
 
         from ..workers import process_pool
 
-        if self.executor is None and (self.workers or os.cpu_count() or 1) > 1:
+        self._depth += 1
+        if self._depth == 1 and self.executor is None and \
+                (self.workers or os.cpu_count() or 1) > 1:
             self._pool = process_pool(self.workers or os.cpu_count() or 1)
         return self
 
     def __exit__(self, kind, *rest):
-        if self._pool is not None:
+        self._depth -= 1
+        if self._pool is not None and (self._depth == 0 or kind is not None):
             if kind is None:
                 self._pool.shutdown(wait=True)
             else:

@@ -66,8 +66,11 @@ class DesignResult(Summarized):
                 "wall_time_s": round(self.wall_time_s, 3)}
 
     def report(self) -> str:
-        lines = ["design " + ("meets the targets" if self.met else
-                              "cannot meet the targets: the closest design")]
+        if not self.ranges:
+            lines = ["the circuit " + ("meets" if self.met else "misses") + " the targets"]
+        else:
+            lines = ["design " + ("meets the targets" if self.met else
+                                  "cannot meet the targets: the closest design")]
         lines += [f"  {k} = {v:.6g}" for k, v in self.values.items()]
         for t in self.targets:
             ok = "ok" if t["met"] else f"misses by {t['miss']:.4g} {t['unit']}".rstrip()
@@ -81,18 +84,17 @@ class DesignResult(Summarized):
         return "\n".join(lines)
 
 
-def design(build, ranges, targets, *, n_start: int | None = None, tries: int = 2,
-           max_nfev: int = 25, step: float = 0.01, seed: int = 0, node: str | None = None,
-           t_stop: float | None = None, fixed: dict | None = None, workers: int | None = None,
-           executor=None, progress: bool = False) -> DesignResult:
+def design(build, ranges, targets=None, *, n_start: int | None = None, tries: int = 2,
+           max_nfev: int = 25, step: float = 0.01, seed: int = 0, **options) -> DesignResult:
     """Find values of ``ranges`` ({name: (low, high)}, Ranges or 'NAME=LOW:HIGH') meeting
     ``targets`` (strings of :mod:`~pneunet.design.spec` or Targets) for ``build`` (a
-    netlist path, NetlistBuilder or picklable builder); see the module docstring.
-    ``n_start``: Latin-hypercube points (default 6 per parameter, at least 8)."""
+    netlist path, NetlistBuilder, picklable builder, or a :class:`Problem` that holds the
+    targets); see the module docstring.  ``n_start``: Latin-hypercube points (default 6
+    per parameter, at least 8); ``options``: those of :class:`Problem` (``node``,
+    ``t_stop``, ``fixed``, ``workers``, ``executor``, ``progress``)."""
     start_time = time.perf_counter()
     ranges = _ranges(ranges)
-    problem = Problem(build, targets, node=node, t_stop=t_stop, fixed=fixed, workers=workers,
-                      executor=executor, progress=progress)
+    problem = build if isinstance(build, Problem) else Problem(build, targets, **options)
     lo = np.log([r.low for r in ranges])
     hi = np.log([r.high for r in ranges])
     names = [r.name for r in ranges]
@@ -110,17 +112,27 @@ def design(build, ranges, targets, *, n_start: int | None = None, tries: int = 2
             if problem.met(problem.metrics(problem.evaluate([_point(names, best[0])])[0])):
                 break
         x = best[0]
-        row = problem.evaluate([_point(names, x)])[0]
-        metrics = problem.metrics(row)
-        met = problem.met(metrics)
-        limiting = [] if met else _limiting(problem, ranges, x, lo, hi, step)
-    values = {k: float(v) for k, v in _point(names, x).items()}
+        result = evaluate(problem, _point(names, x), start_time, ranges)
+        if not result.met:
+            result.limiting = _limiting(problem, ranges, x, lo, hi, step)
+    result.starts = len(starts)
+    result.wall_time_s = time.perf_counter() - start_time
+    return result
+
+
+def evaluate(problem: Problem, values: dict | None = None, start_time: float | None = None,
+             ranges=()) -> DesignResult:
+    """The targets at fixed ``values`` (default: the circuit's own), without a search."""
+    start_time = start_time or time.perf_counter()
+    values = dict(values or {})
+    problem.check(values)
+    metrics = problem.metrics(problem.evaluate([values])[0])
     return DesignResult(values=values, metrics=metrics,
                         targets=[_target_row(t, metrics[t.key]) for t in problem.targets],
-                        met=met, limiting=limiting,
+                        met=problem.met(metrics), limiting=[],
                         ranges={r.name: [r.low, r.high] for r in ranges},
                         simulations=problem.simulations, failed_simulations=problem.failed,
-                        starts=len(starts), wall_time_s=time.perf_counter() - start_time)
+                        starts=0, wall_time_s=time.perf_counter() - start_time)
 
 
 def _ranges(ranges) -> list[Range]:

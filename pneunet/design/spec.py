@@ -36,6 +36,7 @@ MEAS_SLOTS = {"s": "time", "Hz": "frequency", "kPa": "pressure", "mg/s": "flow",
 DEFAULT_REL_TOL = 0.05
 _TARGET = re.compile(r"^\s*([A-Za-z_][\w.]*)(?:@([\w.\[\]]+))?\s*(>=|<=|==|=)\s*(\S.*?)\s*$")
 _PM = re.compile(r"±|\+-|\+/-")
+_QUANTITY_NUMBER = re.compile(r"^([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)")
 TARGET_HINT = "e.g. period=3s, period=3s±0.1s, duty=0.4±10%, swing>=130kPa, p_min@out<=190kPa"
 
 
@@ -167,32 +168,37 @@ def make_range(name: str, low: float, high: float) -> Range:
 
 @dataclass(frozen=True)
 class Tolerance:
-    """A stated spread: ``name`` ± ``amount`` (relative to the nominal if ``relative``)."""
+    """A stated spread: ``name`` ± ``text`` (a quantity, or a percentage of the nominal)."""
 
     name: str
-    amount: float
-    relative: bool
+    text: str
+
+    def amount(self, nominal: float) -> float:
+        """The half-width in the parameter's internal unit (valve-card parameters take
+        units: ``±5kPa``; other parameters plain numbers)."""
+        from ..netlist.models import VALVE_CARD
+
+        what = f"tolerance {self.name}=±{self.text}"
+        if self.text.endswith("%"):
+            return _number(self.text[:-1], what) / 100 * abs(nominal)
+        slot = VALVE_CARD.get(self.name.rsplit(".", 1)[-1], "dimensionless")
+        return _quantity(self.text, slot, what)
 
 
 def parse_tolerance(text: str) -> Tolerance:
     """``NAME=±X`` (a quantity: ``X1.pclose=±5kPa``) or ``NAME=±X%``."""
-    from ..netlist.models import VALVE_CARD
-
     name, eq, spec = text.partition("=")
     hint = "NAME=±X or NAME=±X%, e.g. X1.pclose=±5kPa (also +-5kPa)"
     spec = spec.strip()
     pm = _PM.match(spec)
     if not eq or not name.strip() or not pm:
         raise ParameterError(f"cannot read tolerance {text!r}", hint=hint)
-    amount_text = spec[pm.end():].strip()
-    if amount_text.endswith("%"):
-        amount, relative = _number(amount_text[:-1], f"tolerance {text!r}") / 100, True
-    else:
-        slot = VALVE_CARD.get(name.rsplit(".", 1)[-1], "dimensionless")
-        amount, relative = _quantity(amount_text, slot, f"tolerance {text!r}"), False
-    if not amount > 0:
-        raise ParameterError(f"tolerance {text!r}: the spread must be positive", hint=hint)
-    return Tolerance(name.strip(), float(amount), relative)
+    amount = spec[pm.end():].strip()
+    number = _QUANTITY_NUMBER.match(amount)
+    if not number or not float(number.group(1)) > 0:
+        raise ParameterError(f"tolerance {text!r}: the spread must be a positive number",
+                             hint=hint)
+    return Tolerance(name.strip(), amount)
 
 
 def _number(text: str, what: str) -> float:

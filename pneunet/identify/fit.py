@@ -271,6 +271,8 @@ class ValveFit(Summarized):
                               "unit": VALVE_PARAMETERS[k][0]} for k in NAMES},
                "metrics": {k: (int(v) if isinstance(v, (int, np.integer)) else float(v))
                            for k, v in self.metrics.items()},
+               "covariance": {a: {b: _finite_or_none(float(self.covariance.loc[a, b]))
+                                  for b in NAMES} for a in NAMES},
                "settings": {k: v for k, v in self.settings.items()
                             if isinstance(v, (int, float, str, bool)) or v is None}}
         return out

@@ -11,6 +11,7 @@ Rout out tank {Rout}kPa*s/mg
 Vtank tank 100mL
 Rvent tank atm {Rvent}kPa*s/mg
 .tran 10ms 14s
+.meas tran period PERIOD p(tank) FROM=7s
 .meas tran swing PP p(tank) FROM=7s
 """
 

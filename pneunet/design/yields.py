@@ -1,0 +1,127 @@
+"""Yield under manufacturing spread: the fraction of circuits that meet every target.
+
+``n`` Monte Carlo samples of a :class:`~pneunet.design.spread.Spread` around the design
+values are simulated on the sweep machinery; a sample passes if every target is met (a
+failed simulation or an unmeasured metric fails).  The yield p = passed/n is reported
+with its Monte Carlo standard error √(p(1−p)/n) and the 95 % Wilson score interval, the
+pass fraction of every target, and the sensitivities of each target's metric
+(:mod:`~pneunet.design.sensitivity`).
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+from ..reprs import Summarized
+from .problem import Problem
+from .sensitivity import most_important, plot_tornado, sensitivities
+
+Z95 = 1.959963984540054
+
+
+def wilson(passed: int, n: int, z: float = Z95) -> tuple:
+    """The Wilson score interval of a binomial proportion passed/n."""
+    if n == 0:
+        return (0.0, 1.0)
+    p = passed / n
+    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
+    half = z / (1 + z * z / n) * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n))
+    return (max(0.0, centre - half), min(1.0, centre + half))
+
+
+@dataclass(repr=False)
+class YieldResult(Summarized):
+    """``yield_`` (fraction), ``se`` (Monte Carlo standard error), ``interval`` (95 %
+    Wilson), ``passed``/``n``, ``per_target`` pass fractions, ``sensitivities`` (table),
+    ``most_important`` ({metric: parameter}), ``samples`` (one row per sample: parameters,
+    metrics, ``pass``), ``spread`` (described), ``nominal`` (metrics at the design)."""
+
+    yield_: float
+    se: float
+    interval: tuple
+    passed: int
+    n: int
+    failed_simulations: int
+    per_target: dict
+    sensitivities: object
+    most_important: dict
+    samples: object
+    spread: dict
+    notes: list
+    nominal: dict
+    units: dict
+    seed: int
+    simulations: int
+    wall_time_s: float
+
+    def _summary(self):
+        rows = [("yield", f"{100 * self.yield_:.1f} % ± {100 * self.se:.1f} % "
+                          f"({self.passed} of {self.n})"),
+                ("most important", ", ".join(f"{k}: {v}" for k, v in self.most_important.items())),
+                ("wall time", f"{self.wall_time_s:.3g} s")]
+        return "", rows, ".samples, .sensitivities, .plot_tornado(path), .to_json()"
+
+    def to_json(self) -> dict:
+        table = self.sensitivities.astype(object).where(self.sensitivities.notna(), None)
+        return {"yield": self.yield_, "se": self.se, "interval95": list(self.interval),
+                "passed": self.passed, "n": self.n, "seed": self.seed,
+                "failed_simulations": self.failed_simulations, "per_target": self.per_target,
+                "most_important": self.most_important, "spread": self.spread,
+                "sensitivities": table.to_dict(orient="records"), "notes": self.notes,
+                "simulations": self.simulations, "wall_time_s": round(self.wall_time_s, 3)}
+
+    def report(self) -> str:
+        lo, hi = self.interval
+        lines = [f"yield {100 * self.yield_:.1f} % ± {100 * self.se:.1f} % (Monte Carlo SE; "
+                 f"95 % Wilson {100 * lo:.1f}–{100 * hi:.1f} %): {self.passed} of {self.n} "
+                 f"samples meet every target"]
+        lines += [f"  {k:<24} {100 * v:.1f} % pass" for k, v in self.per_target.items()]
+        if self.failed_simulations:
+            lines.append(f"  {self.failed_simulations} simulations failed (counted as misses)")
+        lines.append("sensitivities (effect of one SD; share of the metric's variance):")
+        for row in self.sensitivities.itertuples():
+            effect = "n/a (too few samples)" if math.isnan(row.effect) else \
+                f"{row.effect:+.4g} {self.units.get(row.metric, '')}  share {row.share:.0%}"
+            lines.append(f"  {row.metric:<12} {row.parameter:<14} SD {row.sd:<9.4g} "
+                         f"effect {effect}")
+        lines += [f"  most important for {k}: {v}" for k, v in self.most_important.items()]
+        lines += [f"note: {n}" for n in self.notes]
+        return "\n".join(lines)
+
+    def plot_tornado(self, path=None):
+        return plot_tornado(self.sensitivities, self.nominal, self.units, path)
+
+
+def yield_analysis(problem: Problem, values: dict, spread, n: int = 1000, seed: int = 0,
+                   nominal: dict | None = None) -> YieldResult:
+    """Monte Carlo yield of the design ``values`` under ``spread`` (module docstring);
+    ``problem`` runs the simulations (use it as a context manager for one pool);
+    ``nominal`` the metrics at the design (simulated if not given)."""
+    import pandas as pd
+
+    from ..errors import ParameterError
+
+    if n < 1:
+        raise ParameterError(f"a yield needs at least one sample, got {n}")
+    start, sims = time.perf_counter(), problem.simulations
+    if nominal is None:
+        nominal = problem.metrics(problem.evaluate([dict(values)])[0])
+    points = [dict(values, **s) for s in spread.sample(n, seed)]
+    rows = problem.evaluate(points, desc="yield")
+    table = pd.DataFrame([dict(p, **problem.metrics(r), error=r.get("error"))
+                          for p, r in zip(points, rows)])
+    keys = [t.key for t in problem.targets]
+    ok = {t.key: table[t.key].map(t.met) for t in problem.targets}
+    table["pass"] = pd.concat(ok, axis=1).all(axis=1)
+    passed = int(table["pass"].sum())
+    p = passed / n
+    sens = sensitivities(table, spread.names, keys)
+    return YieldResult(yield_=p, se=math.sqrt(p * (1 - p) / n), interval=wilson(passed, n),
+                       passed=passed, n=n, failed_simulations=int(table["error"].notna().sum()),
+                       per_target={k: float(v.mean()) for k, v in ok.items()},
+                       sensitivities=sens, most_important=most_important(sens),
+                       samples=table, spread=spread.describe(), notes=list(spread.notes),
+                       nominal=nominal, units={t.key: t.unit for t in problem.targets},
+                       seed=seed, simulations=problem.simulations - sims,
+                       wall_time_s=time.perf_counter() - start)

@@ -1,0 +1,86 @@
+"""Yield under spread: the reported yield equals a brute-force simulation of the same
+samples drawn independently; a fitted covariance is used; missing spread is exit 2."""
+import dataclasses
+import json
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from pneunet import measure
+from pneunet.cli import main
+from pneunet.netlist import parse_file
+
+
+def brute_force_period(path, rvent, pclose):
+    """Period (s) of p(tank) from 7 s, simulated without pneunet.design."""
+    circuit = parse_file(path, overrides={"Rvent": rvent}).circuit
+    spec = circuit.elements["X1"]
+    spec.params["model"] = dataclasses.replace(spec.params["model"], pclose=pclose)
+    sol = circuit.tran(14.0)
+    return measure.period(sol.t, sol.pressure("tank"), t_from=7.0)
+
+
+def test_yield_equals_brute_force_of_the_same_samples(short_oscillator, tmp_path, capsys):
+    n, seed = 12, 3
+    samples = tmp_path / "samples.csv"
+    main(["design", str(short_oscillator), "--target", "period=3s±0.1s", "--yield", str(n),
+          "--seed", str(seed), "--tolerance", "X1.pclose=±5kPa", "--tolerance", "Rvent=±0.5%",
+          "--samples", str(samples), "--workers", "2", "--json"])
+    out = json.loads(capsys.readouterr().out)["yield"]
+    # the same samples drawn here: uniform p_close 96.42 ± 5 kPa, then R_vent 3 ± 0.5 %
+    rng = np.random.default_rng(seed)
+    pclose = 96.42 - 5 + 10 * rng.random(n)
+    rvent = 3 * 0.995 + 0.03 * rng.random(n)
+    table = pd.read_csv(samples)
+    assert np.allclose(table["X1.pclose"], pclose, rtol=0, atol=1e-9)
+    assert np.allclose(table["Rvent"], rvent, rtol=0, atol=1e-12)
+    passed = sum(abs(brute_force_period(short_oscillator, rv, pc) - 3.0) <= 0.1
+                 for rv, pc in zip(rvent, pclose))
+    assert 0 < passed < n  # the tolerance straddles the target: a real count
+    assert (out["passed"], out["n"]) == (passed, n)
+    p = passed / n
+    assert out["yield"] == pytest.approx(p)
+    assert out["se"] == pytest.approx(math.sqrt(p * (1 - p) / n))
+    lo, hi = out["interval95"]
+    assert lo < p < hi
+    assert out["most_important"] == {"period": "X1.pclose"}
+
+
+def test_yield_under_a_fitted_covariance(short_oscillator, tmp_path, capsys):
+    """pneunet fit on a bench CSV → fit.json → the yield samples the fitted covariance."""
+    from pneunet.identify import simulate_bench
+    from pneunet.valve_params import PAPER_VALVES
+
+    bench = tmp_path / "bench.csv"
+    simulate_bench(PAPER_VALVES["axi"], seed=6).to_csv(bench, index=False)
+    assert main(["fit", str(bench), "--bootstrap", "20", "--json"]) == 0
+    fit_json = tmp_path / "fit.json"
+    fit_json.write_text(capsys.readouterr().out)
+    fit = json.loads(fit_json.read_text())
+    samples = tmp_path / "samples.csv"
+    main(["design", str(short_oscillator), "--target", "period=3s±0.1s", "--yield", "6",
+          "--fit", f"X1={fit_json}", "--samples", str(samples), "--workers", "2", "--json"])
+    out = json.loads(capsys.readouterr().out)["yield"]
+    spread = out["spread"]
+    assert set(spread) == {f"X1.{k}" for k in fit["params"]}
+    for k in fit["params"]:
+        assert spread[f"X1.{k}"]["sd"] == pytest.approx(math.sqrt(fit["covariance"][k][k]))
+        assert spread[f"X1.{k}"]["mean"] == pytest.approx(getattr(PAPER_VALVES["axi"], k))
+    table = pd.read_csv(samples)
+    assert table["X1.pclose"].nunique() == 6 and out["n"] == 6
+
+
+@pytest.mark.parametrize("args, message", [
+    ([], "the .model cards carry no uncertainty (valves: X1 (axi_0p6mm))"),
+    (["--tolerance", "X1.pclos=±5kPa"], "did you mean 'pclose'?"),
+    (["--tolerance", "X1.pclose=5kPa"], "cannot read tolerance"),
+    (["--fit", "X1=missing.json"], "cannot read the fit"),
+])
+def test_yield_bad_input_is_exit_2(short_oscillator, capsys, args, message):
+    argv = ["design", str(short_oscillator), "--target", "period=3s", "--yield", "5",
+            "--json"] + args
+    assert main(argv) == 2
+    captured = capsys.readouterr()
+    assert captured.out == "" and message in captured.err and "Traceback" not in captured.err
