@@ -26,7 +26,8 @@ def _load_builtins() -> None:
     if _LOADED:
         return
     _LOADED = True
-    from . import check_valves, elastic, resistors, sources, thermal, valves, volumes  # noqa: F401
+    from . import (check_valves, elastic, liquid, resistors, sources, thermal,  # noqa: F401
+                   valves, volumes)
     from importlib.metadata import entry_points
 
     for ep in entry_points(group="pneunet.elements"):

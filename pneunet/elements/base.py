@@ -15,7 +15,8 @@ instances at once.  The assembler only sees this interface:
   become differential unknowns);
 * ``pinned_ports`` and ``pinned_pressure(t)``: ports whose node pressure the
   element imposes (pressure sources);
-* ``signals(t, p)``: named per-instance results for the solution (flows…).
+* ``signals(t, p)``: named per-instance results for the solution (flows…);
+* ``fluids``: the fluids its law holds for ('gas', 'liquid'; see ``.options fluid``).
 
 The assembler never asks what type an element is.
 """
@@ -52,14 +53,14 @@ class Param:
     def check(self, value: float, where: str, name: str) -> None:
         from ..units import SLOTS, pretty
 
-        unit = pretty(SLOTS[self.slot])
+        unit = f" {pretty(SLOTS[self.slot])}" if SLOTS[self.slot] else ""
         if not np.isfinite(value):
             raise ParameterError(f"{name} must be a finite number, got {value}", where=where)
         too_low = value < self.low if self.low_inclusive else value <= self.low
         if too_low or value > self.high:
             lo = "[" if self.low_inclusive else "("
             raise ParameterError(
-                f"{name}={value:g} {unit} is outside its valid range {lo}{self.low:g}, {self.high:g}]",
+                f"{name}={value:g}{unit} is outside its valid range {lo}{self.low:g}, {self.high:g}]",
                 where=where, hint=self.doc)
 
 
@@ -100,6 +101,7 @@ class ElementFamily:
     flow_ports: ClassVar[tuple[int, ...] | None] = None  # ports that pass flow (None: all)
     storage_ports: ClassVar[tuple[int, ...]] = ()
     pinned_ports: ClassVar[tuple[int, ...]] = ()
+    fluids: ClassVar[tuple[str, ...]] = ("gas",)  # 'gas' and/or 'liquid': where its law holds
 
     def __init__(self, specs: list[ElementSpec], context: FamilyContext):
         self.specs = specs

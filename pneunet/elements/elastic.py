@@ -4,7 +4,8 @@ The mass stored is m = ρ(p)·V(p) with ρ = p·M/(R·T), so the capacitance is
 
     C(p) = dm/dp = (M/(R·T)) · (V(p) + p·V'(p))            [mg/kPa]
 
-(ρ·dV/dp plus V·dρ/dp).  ``accumulator``: V = V0 + k·(p − pref), valid while V > 0.
+(ρ·dV/dp plus V·dρ/dp).  In a liquid circuit (density ρ, bulk modulus K; see
+:mod:`pneunet.liquids`) the wall compliance adds to the liquid's: C = ρ·(V/K + dV/dp).  ``accumulator``: V = V0 + k·(p − pref), valid while V > 0.
 ``pv_volume``: V(p) from a table of (p, V) points (a measured curve; V must not decrease),
 interpolated by a monotone cubic (scipy's PchipInterpolator, C¹) and continued linearly
 with its end slopes outside the table.  Signal ``V_<name>`` is the volume, mL.
@@ -28,6 +29,7 @@ class _ElasticVolume(StorageNode):
     def __init__(self, specs, context):
         super().__init__(specs, context)
         self._rho_per_p = context.gas.capacitance(1.0, context.options.temperature)  # mg/(kPa·mL)
+        self._liquid = context.options.liquid
 
     def volume(self, p):
         """V (mL), dV/dp (mL/kPa) and d²V/dp² of each instance at pressures p (..., n)."""
@@ -35,6 +37,9 @@ class _ElasticVolume(StorageNode):
 
     def capacitance(self, p):
         v, dv, d2v = self.volume(p)
+        if self._liquid is not None:  # C = ρ·(V/K + dV/dp)
+            rho, k = self._liquid.density, self._liquid.bulk_modulus
+            return rho * (v / k + dv), rho * (dv / k + d2v)
         return self._rho_per_p * (v + p * dv), self._rho_per_p * (2.0 * dv + p * d2v)
 
     def signals(self, t, p):

@@ -54,6 +54,7 @@ class PressureSource(ElementFamily):
     kind = "pressure_source"
     aliases = ("psource", "P")
     description = "pressure source: pins the absolute pressure of a node"
+    fluids = ("gas", "liquid")
     ports = ("node",)
     pinned_ports = (0,)
     params = {"value": Param("pressure", "absolute pressure or waveform, kPa", low=0.0,
@@ -88,6 +89,7 @@ class FlowSource(ElementFamily):
     kind = "flow_source"
     aliases = ("fsource", "F")
     description = "mass-flow source from node a to node b"
+    fluids = ("gas", "liquid")
     ports = ("a", "b")
     params = {"value": Param("flow", "mass flow a→b or waveform, mg/s", kind="waveform")}
 

@@ -1,5 +1,8 @@
 """Volumes that store gas: rigid volumes (isothermal or polytropic) and actuators.
 
+In a liquid circuit (``.options fluid=water``) a rigid volume stores liquid compressed
+with bulk modulus K: C = ρ·V/K (mg/kPa), constant.
+
 Mass in a volume V at pressure p, compressed polytropically with exponent n from
 a reference state (p_ref, T) where p_ref is its initial pressure:
 
@@ -23,6 +26,7 @@ class StorageNode(ElementFamily):
 
     ports = ("node",)
     storage_ports = (0,)
+    fluids = ("gas", "liquid")
 
     def capacitance(self, p):
         """C(p) in mg/kPa and dC/dp, for pressures p (..., n)."""
@@ -63,6 +67,9 @@ class Volume(StorageNode):
         p0 = self.column("p0")
         self._p_ref = np.where(np.isnan(p0), opts.ambient, p0)
         self._isothermal = bool(np.all(self._n == 1.0))
+        if opts.liquid is not None:  # C = ρ·V/K, constant (n does not apply)
+            self._c0 = opts.liquid.density * self.volume() / opts.liquid.bulk_modulus
+            self._isothermal = True
 
     def volume(self) -> np.ndarray:
         """Volume of each instance, mL."""

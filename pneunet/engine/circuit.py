@@ -58,6 +58,13 @@ class Circuit:
             first = self.elements[name].span
             raise TopologyError(f"duplicate element name {name!r}", where=where,
                                 hint=f"first defined at {first}" if first else "names must be unique")
+        fluid = "gas" if self.options.liquid is None else "liquid"
+        if fluid not in family.fluids:
+            raise ParameterError(
+                f"{family.kind} is a {' or '.join(family.fluids)} element; this circuit's fluid is "
+                f"{self.options.fluid}", where=where,
+                hint="liquid circuits: orifice, laminar_tube, volume, accumulator, pv_volume, "
+                     "sources" if fluid == "liquid" else "liquids need .options fluid=water")
         nodes = tuple(str(n) for n in nodes)
         if len(nodes) != len(family.ports):
             raise TopologyError(
@@ -164,6 +171,14 @@ class Circuit:
         """Elastic volume from a pressure–volume ``table``: (p kPa, V mL) arrays or a CSV file
         (columns ``p_<unit>,V_<unit>``), interpolated by a monotone cubic (PCHIP)."""
         return self.add("pv_volume", name, (node,), table=table, p0=p0, **kw)
+
+    def orifice(self, name, a, b, diameter, Cd=None, **kw):
+        """Liquid orifice of ``diameter`` (mm), discharge coefficient ``Cd`` (default 0.61)."""
+        return self.add("orifice", name, (a, b), diameter=diameter, Cd=Cd, **kw)
+
+    def laminar_tube(self, name, a, b, length, diameter, **kw):
+        """Liquid tube in laminar flow: ``length`` and inner ``diameter`` in mm."""
+        return self.add("laminar_tube", name, (a, b), length=length, diameter=diameter, **kw)
 
     def set_initial(self, node: str, pressure) -> None:
         """Initial pressure of a node (netlist ``.ic``), kPa or a string with unit."""

@@ -6,6 +6,7 @@ from dataclasses import dataclass, fields, replace
 from ..errors import ParameterError
 from ..gas import AIR, GASES, ROOM_TEMPERATURE_K, STANDARD_ATMOSPHERE_KPA, Gas
 from ..laws import DEFAULT_FLOW_BAND_KPA2
+from ..liquids import LIQUIDS, Liquid
 
 
 @dataclass(frozen=True)
@@ -16,6 +17,8 @@ class SimulationOptions:
     ambient             ambient pressure in kPa: reference nodes and gauge units
     temperature         gas temperature in K (isothermal elements)
     gas                 name of the gas ('air', 'nitrogen')
+    fluid               'gas' (default: the gas above) or a liquid ('water',
+                        'hydraulic_oil'; see pneunet.liquids)
     flow_band           zero-flow regularisation band ε in kPa² (see laws.signed_root)
     dead_volume         volume in mL added at every node without a volume; 0 keeps
                         those nodes algebraic and folds are crossed by explicit jumps
@@ -28,6 +31,7 @@ class SimulationOptions:
     ambient: float = STANDARD_ATMOSPHERE_KPA
     temperature: float = ROOM_TEMPERATURE_K
     gas: str = "air"
+    fluid: str = "gas"
     flow_band: float = DEFAULT_FLOW_BAND_KPA2
     dead_volume: float = 0.0
     max_step: float = 0.0
@@ -46,10 +50,18 @@ class SimulationOptions:
                 raise ParameterError(f"option {key}={value} is outside [{lo:g}, {hi:g}]")
         if self.gas.lower() not in GASES:
             raise ParameterError(f"unknown gas {self.gas!r}", hint="known: " + ", ".join(GASES))
+        if self.fluid.lower() != "gas" and self.fluid.lower() not in LIQUIDS:
+            raise ParameterError(f"unknown fluid {self.fluid!r}",
+                                 hint="known: gas, " + ", ".join(LIQUIDS))
 
     @property
     def gas_model(self) -> Gas:
         return GASES.get(self.gas.lower(), AIR)
+
+    @property
+    def liquid(self) -> Liquid | None:
+        """The circuit's liquid, or None for a gas circuit."""
+        return LIQUIDS.get(self.fluid.lower())
 
     def replace(self, **changes) -> "SimulationOptions":
         names = {f.name for f in fields(self)}

@@ -61,7 +61,8 @@ def print_circuit(circuit, *, header: bool = True) -> str:
     if header:
         lines.append(f"* {circuit.title}" if circuit.title else "* pneunet circuit")
     defaults = SimulationOptions()
-    opts = [f"{f.name}={_num(getattr(circuit.options, f.name)) if f.name != 'gas' else circuit.options.gas}"
+    opts = [f"{f.name}={getattr(circuit.options, f.name)}" if f.name in ("gas", "fluid") else
+            f"{f.name}={_num(getattr(circuit.options, f.name))}"
             for f in fields(circuit.options)
             if not _same(getattr(circuit.options, f.name), getattr(defaults, f.name))]
     if opts:

@@ -130,11 +130,33 @@ def _pv_volume():
     return c, {"b": 250.0}, dict(kind="pv_volume", nodes=("b",), table=([100, 200], [20, 10]))
 
 
+def _orifice():
+    c = Circuit("orifice", ambient=100.0, fluid="water")
+    c.pressure_source("P1", "a", 400.0)
+    c.orifice("O1", "a", "m", diameter=0.5)
+    c.orifice("O2", "m", "atm", diameter=0.5, Cd=0.61)
+    c.volume("V1", "m", V=10.0)
+    # equal orifices: equal pressure drops
+    return c, {"m": 250.0}, dict(kind="orifice", nodes=("a", "b"), diameter=-1.0)
+
+
+def _laminar_tube():
+    c = Circuit("laminar tube", ambient=100.0, fluid="water")
+    c.pressure_source("P1", "a", 400.0)
+    c.laminar_tube("T1", "a", "m", length=1000.0, diameter=0.5)
+    c.laminar_tube("T2", "m", "atm", length=3000.0, diameter=0.5)
+    c.accumulator("A1", "m", V0=5.0, k=0.001)
+    # conductances 3:1, the drops 1:3
+    return c, {"m": 325.0}, dict(kind="laminar_tube", nodes=("a", "b"), length=0.0,
+                                 diameter=1.0)
+
+
 CASES = {"pressure_source": _pressure_source, "flow_source": _flow_source,
          "resistor": _resistor, "pipe": _pipe, "volume": _volume, "actuator": _actuator,
          "valve": _valve, "thermal_volume": _thermal_volume,
          "thermal_chamber": _thermal_chamber, "thermal_inlet": _thermal_chamber,
-         "check_valve": _check_valve, "accumulator": _accumulator, "pv_volume": _pv_volume}
+         "check_valve": _check_valve, "accumulator": _accumulator, "pv_volume": _pv_volume,
+         "orifice": _orifice, "laminar_tube": _laminar_tube}
 
 
 def test_every_registered_family_has_a_conformance_case():
