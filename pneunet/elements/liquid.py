@@ -59,8 +59,9 @@ class Orifice(_LiquidLaw):
     description = "liquid orifice ṁ = Cd·A·√(2ρΔp)"
     params = {
         "diameter": Param("length", "orifice diameter, mm", low=0.0, low_inclusive=False),
-        "Cd": Param("dimensionless", "discharge coefficient (0.61 sharp-edged)", low=0.0,
-                    high=1.0, low_inclusive=False, default=0.61),
+        "Cd": Param("dimensionless", "discharge coefficient (0.61 sharp-edged; 1/√K for a "
+                    "minor-loss factor K)", low=0.0, high=2.0, low_inclusive=False,
+                    default=0.61),
     }
 
     def __init__(self, specs, context):

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, fields, replace
+from numbers import Real
 
 from ..errors import ParameterError
 from ..gas import AIR, GASES, ROOM_TEMPERATURE_K, STANDARD_ATMOSPHERE_KPA, Gas
@@ -46,6 +47,10 @@ class SimulationOptions:
     def __post_init__(self):
         for key, (lo, hi) in self._RANGES.items():
             value = getattr(self, key)
+            if isinstance(value, bool) or not isinstance(value, Real):
+                raise ParameterError(f"option {key} must be a number, got {value!r}",
+                                     hint="options take numbers in internal units (kPa, K, "
+                                          "s, mL); in a netlist: .options ambient=96kPa")
             if not lo <= value <= hi:
                 raise ParameterError(f"option {key}={value} is outside [{lo:g}, {hi:g}]")
         if self.gas.lower() not in GASES:

@@ -72,8 +72,8 @@ def test_fluid_is_stated_once_and_gas_elements_are_refused():
         Circuit().orifice("O1", "a", "b", diameter=1.0)
     with pytest.raises(ParameterError, match="unknown fluid 'honey'"):
         Circuit(fluid="honey")
-    with pytest.raises(ParameterError, match="O2.*Cd=1.5 is outside its valid range"):
-        Circuit(fluid="water").orifice("O2", "a", "b", diameter=1.0, Cd=1.5)
+    with pytest.raises(ParameterError, match="O2.*Cd=2.5 is outside its valid range"):
+        Circuit(fluid="water").orifice("O2", "a", "b", diameter=1.0, Cd=2.5)
 
 
 def test_liquid_circuit_prints_and_parses_back():
