@@ -13,7 +13,7 @@ from pathlib import Path
 
 from ..analysis import sweep as S
 from .metrics import SpecMeasure
-from .spec import Target, parse_target
+from .spec import parse_targets
 
 
 class Problem:
@@ -35,8 +35,7 @@ class Problem:
             deck = build.deck()
             measures = {m.name: measure_unit(m) for m in deck.measures}
             ambient = deck.circuit.options.ambient
-        self.targets = [t if isinstance(t, Target) else parse_target(t, measures, ambient)
-                        for t in targets]
+        self.targets = parse_targets(list(targets or ()), measures, ambient)
         if not self.targets:
             from ..errors import ParameterError
 

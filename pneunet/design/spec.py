@@ -34,7 +34,7 @@ ALIASES = {"freq": "frequency", "duty_cycle": "duty", "pmin": "p_min", "pmax": "
 MEAS_SLOTS = {"s": "time", "Hz": "frequency", "kPa": "pressure", "mg/s": "flow",
               "kPa*s": "dimensionless", "mg": "dimensionless", "": "dimensionless"}
 DEFAULT_REL_TOL = 0.05
-_TARGET = re.compile(r"^\s*([A-Za-z_][\w.]*)(?:@([\w.\[\]]+))?\s*(>=|<=|==|=)\s*(\S.*?)\s*$")
+_TARGET = re.compile(r"^\s*([A-Za-z_*?][\w.*?]*)(?:@([\w.\[\]]+))?\s*(>=|<=|==|=)\s*(\S.*?)\s*$")
 _PM = re.compile(r"±|\+-|\+/-")
 _QUANTITY_NUMBER = re.compile(r"^([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)")
 TARGET_HINT = "e.g. period=3s, period=3s±0.1s, duty=0.4±10%, swing>=130kPa, p_min@out<=190kPa"
@@ -98,6 +98,29 @@ def catalogue(measures: dict | None = None) -> dict:
     out = {k: (slot, unit, "builtin") for k, (slot, unit) in BUILTIN.items()}
     for name, unit in (measures or {}).items():
         out[name] = (MEAS_SLOTS.get(unit, "dimensionless"), unit, "meas")
+    return out
+
+
+def parse_targets(texts, measures: dict | None = None, ambient_kpa: float = 96.0) -> list:
+    """Targets from strings; a name with ``*``/``?`` (``sel*>=296kPa``) stands for every
+    ``.meas`` name it matches (a truth table's levels), in the netlist's order."""
+    import fnmatch
+
+    out = []
+    for text in texts:
+        if isinstance(text, Target):
+            out.append(text)
+            continue
+        m = _TARGET.match(text)
+        if not m or not any(c in m.group(1) for c in "*?"):
+            out.append(parse_target(text, measures, ambient_kpa))
+            continue
+        names = [k for k in measures or {} if fnmatch.fnmatchcase(k, m.group(1))]
+        if not names:
+            raise ParameterError(f"target {text!r}: no .meas name matches {m.group(1)!r}",
+                                 hint=".meas names: " + (", ".join(measures or {}) or "none"))
+        rest = text[m.end(1):]
+        out += [parse_target(name + rest, measures, ambient_kpa) for name in names]
     return out
 
 

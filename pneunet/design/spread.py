@@ -99,9 +99,30 @@ def from_tolerances(problem, point: dict, tolerances, dist: str = "uniform") -> 
     spread = Spread()
     for tol in tolerances:
         tol = tol if isinstance(tol, Tolerance) else parse_tolerance(tol)
-        centre = nominal(problem, point, tol.name)
-        spread.independent[tol.name] = S.tolerance(centre, tol.amount(centre), dist)
+        for name in expand(problem, point, tol.name):
+            centre = nominal(problem, point, name)
+            spread.independent[name] = S.tolerance(centre, tol.amount(centre), dist)
     return spread
+
+
+def expand(problem, point: dict, name: str) -> list:
+    """``name``, or for ``ELEMENT.PARAM`` with ``*``/``?`` in ELEMENT (``*.pclose``: every
+    valve printed separately) the matching elements that have PARAM."""
+    import fnmatch
+
+    element, _, param = name.rpartition(".")
+    if not any(c in element for c in "*?"):
+        return [name]
+    full = dict(problem.fixed, **point)
+    circuit = S.apply_overrides(problem.build(full), full)
+    names = [f"{k}.{param}" for k, spec in circuit.elements.items()
+             if fnmatch.fnmatchcase(k, element) and
+             (param in spec.params or hasattr(spec.params.get("model"), param))]
+    if not names:
+        raise ParameterError(f"spread of {name}: no element matching {element!r} has a "
+                             f"parameter {param!r}", hint="elements: " +
+                             ", ".join(circuit.elements))
+    return names
 
 
 def from_fit(problem, point: dict, element: str, fit) -> Spread:

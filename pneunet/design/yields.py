@@ -18,6 +18,8 @@ from .problem import Problem
 from .sensitivity import most_important, plot_tornado, sensitivities
 
 Z95 = 1.959963984540054
+#: parameters per metric in the text report
+TOP = 3
 
 
 def wilson(passed: int, n: int, z: float = Z95) -> tuple:
@@ -79,8 +81,11 @@ class YieldResult(Summarized):
         lines += [f"  {k:<24} {100 * v:.1f} % pass" for k, v in self.per_target.items()]
         if self.failed_simulations:
             lines.append(f"  {self.failed_simulations} simulations failed (counted as misses)")
-        lines.append("sensitivities (effect of one SD; share of the metric's variance):")
-        for row in self.sensitivities.itertuples():
+        lines.append("sensitivities (effect of one SD; share of the metric's variance; "
+                     f"at most {TOP} parameters per metric, all in the JSON):")
+        table = self.sensitivities.assign(order=-self.sensitivities["share"].fillna(0))
+        top = table.sort_values(["order"], kind="stable").groupby("metric", sort=False).head(TOP)
+        for row in top.loc[table.index.intersection(top.index)].itertuples():
             effect = "n/a (too few samples)" if math.isnan(row.effect) else \
                 f"{row.effect:+.4g} {self.units.get(row.metric, '')}  share {row.share:.0%}"
             lines.append(f"  {row.metric:<12} {row.parameter:<14} SD {row.sd:<9.4g} "

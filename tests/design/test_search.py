@@ -55,3 +55,14 @@ def test_bad_input_is_exit_2_before_simulating(short_oscillator, capsys, args, m
     assert main(argv) == 2
     captured = capsys.readouterr()
     assert captured.out == "" and message in captured.err and "Traceback" not in captured.err
+
+
+def test_a_wildcard_target_stands_for_every_matching_meas():
+    from pneunet.design.spec import parse_targets
+
+    measures = {"sel0": "kPa", "idle0": "kPa", "sel1": "kPa"}
+    targets = parse_targets(["sel*>=296kPa", "period=3s"], measures)
+    assert [(t.key, t.op, t.value) for t in targets] == [
+        ("sel0", ">=", 296.0), ("sel1", ">=", 296.0), ("period", "=", 3.0)]
+    with pytest.raises(Exception, match="no .meas name matches 'act\\*'"):
+        parse_targets(["act*>=1kPa"], measures)

@@ -26,7 +26,7 @@ def test_yield_equals_brute_force_of_the_same_samples(short_oscillator, tmp_path
     n, seed = 12, 3
     samples = tmp_path / "samples.csv"
     main(["design", str(short_oscillator), "--target", "period=3s±0.1s", "--yield", str(n),
-          "--seed", str(seed), "--tolerance", "X1.pclose=±5kPa", "--tolerance", "Rvent=±0.5%",
+          "--seed", str(seed), "--tolerance", "*.pclose=±5kPa", "--tolerance", "Rvent=±0.5%",
           "--samples", str(samples), "--workers", "2", "--json"])
     out = json.loads(capsys.readouterr().out)["yield"]
     # the same samples drawn here: uniform p_close 96.42 ± 5 kPa, then R_vent 3 ± 0.5 %
