@@ -162,6 +162,13 @@ class Circuit:
         return self.add("check_valve", name, (a, b), R=R, pcrack=pcrack, width=width,
                         Rleak=Rleak, **kw)
 
+    def hysteretic_check_valve(self, name, a, b, state, R, pcrack, preseat, width=None,
+                               Rleak=None, tau=None, **kw):
+        """Check valve a→b cracking at ``pcrack`` and reseating at ``preseat`` (kPa); its
+        open fraction relaxes with time constant ``tau`` (s) at the internal node ``state``."""
+        return self.add("hysteretic_check_valve", name, (a, b, state), R=R, pcrack=pcrack,
+                        preseat=preseat, width=width, Rleak=Rleak, tau=tau, **kw)
+
     def accumulator(self, name, node, V0, k, pref=None, p0=None, **kw):
         """Elastic volume V = V0 + k·(p − pref): ``V0`` (mL) at ``pref`` (kPa, default
         ambient), compliance ``k`` (mL/kPa), initial pressure ``p0``."""

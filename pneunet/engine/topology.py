@@ -45,7 +45,8 @@ def check_topology(circuit) -> None:
     if not pinned:
         raise TopologyError("no node has a defined pressure",
                             hint="add a pressure source, or connect a vent to 'atm' (or '0')")
-    floating = [n for n in circuit.nodes if n not in touched_by_flow and n not in pinned]
+    floating = [n for n in circuit.nodes
+                if n not in touched_by_flow and n not in pinned and n not in storage]
     if floating:
         users = [s.name for s in circuit.elements.values() if floating[0] in s.nodes]
         raise TopologyError(
@@ -95,7 +96,7 @@ def dangling_nodes(circuit) -> list[str]:
             seen.setdefault(node, []).append(spec)
     out = []
     for node, specs in seen.items():
-        if len(specs) != 1 or circuit.is_reference(node):
+        if len(specs) != 1 or circuit.is_reference(node) or _internal_state(specs[0], node):
             continue
         spec = specs[0]
         others = [n for n in seen if n != node and not circuit.is_reference(n)]
@@ -104,3 +105,13 @@ def dangling_nodes(circuit) -> list[str]:
         out.append(f"{where}node {node!r} has one connection ({spec.name})"
                    + (f"; did you mean {close[0]!r}?" if close else ""))
     return out
+
+
+def _internal_state(spec, node) -> bool:
+    """A node where the element keeps a state of its own (a storage port passing no flow,
+    e.g. a hysteretic check valve's open fraction): one connection is all it has."""
+    from .. import elements
+
+    family = elements.family(spec.kind)
+    port = spec.nodes.index(node)
+    return port in family.storage_ports and port not in family.passing_flow(len(spec.nodes))

@@ -91,3 +91,32 @@ def test_netlist_letter_and_kind_and_bad_parameters():
     with pytest.raises(ParameterError, match="Rleak=0.1 .* must exceed .* R=0.5") as err:
         Circuit().check_valve("D9", "a", "b", R=0.5, Rleak=0.1)
     assert "D9" in str(err.value)
+
+
+def test_hysteretic_valve_cracks_and_reseats_at_its_two_pressures():
+    """Δp imposed by two sources ramps 0 → 50 → 0 kPa: the valve opens at pcrack = 30 on
+    the way up, stays open through the band down to preseat = 10, and is closed (leak only)
+    in the same band on the way up."""
+    width, tau, preseat = 1.0, 1e-3, 10.0
+    c = Circuit("hysteresis", ambient=AMBIENT, flow_band=1e-6)
+    c.pressure_source("P1", "a", PiecewiseLinear((0.0, 2.0, 4.0), (AMBIENT, AMBIENT + 50.0,
+                                                                    AMBIENT)))
+    c.pressure_source("P2", "b", AMBIENT)
+    c.hysteretic_check_valve("D1", "a", "b", "d1_state", R=R, pcrack=PCRACK, preseat=preseat,
+                             width=width, Rleak=RLEAK, tau=tau)
+    sol = c.tran(4.0, t_step=0.002)
+    drop, x, t = sol.pressure("a") - AMBIENT, sol.signals["opening_D1"], sol.t
+    opens = drop[np.argmax(x > 0.5)]
+    closes = drop[t > 2.0][np.argmax(x[t > 2.0] < 0.5)]
+    # crossing x = 1/2 takes about τ·ln 2 after the drive switches on within `width`
+    assert PCRACK < opens < PCRACK + width + 0.1
+    assert preseat - width - 0.1 < closes < preseat
+    band = (drop > preseat + 2 * width) & (drop < PCRACK - 2 * width)
+    rising, falling = band & (t < 2.0), band & (t > 2.0)
+    np.testing.assert_allclose(x[rising], 0.0, atol=1e-9)
+    np.testing.assert_allclose(x[falling], 1.0, atol=1e-6)
+    root = np.sqrt(sol.pressure("a") ** 2 - AMBIENT ** 2)
+    np.testing.assert_allclose(sol.flow("D1"), (x / R + 1 / RLEAK) * root, rtol=1e-3,
+                               atol=1e-3)
+    with pytest.raises(ParameterError, match="preseat=40 kPa must be below pcrack=30"):
+        c.hysteretic_check_valve("D2", "a", "b", "s2", R=R, pcrack=30.0, preseat=40.0)

@@ -114,6 +114,20 @@ def _check_valve():
                                             Rleak=0.5)
 
 
+def _hysteretic_check_valve():
+    c = Circuit("hysteretic check valve", ambient=100.0)
+    c.pressure_source("P1", "a", 400.0)
+    c.hysteretic_check_valve("D1", "a", "b", "s1", R=1.0, pcrack=20.0, preseat=5.0,
+                             width=100.0, Rleak=40.0, tau=0.01)
+    c.volume("V1", "b", V=10.0)
+    c.resistor("R2", "b", "atm", R=1.0)
+    # opens and stays open: equal flows through the valve (open, R=1 ‖ leak) and R2
+    g = 1.0 + 1 / 40.0
+    b = np.sqrt((g ** 2 * 400.0 ** 2 + 100.0 ** 2) / (g ** 2 + 1.0))
+    return c, {"b": b, "s1": 200.0}, dict(kind="hysteretic_check_valve", nodes=("a", "b", "s"),
+                                          R=1.0, pcrack=5.0, preseat=10.0)
+
+
 def _accumulator():
     c = Circuit("accumulator", ambient=100.0)
     c.pressure_source("P1", "a", 250.0)
@@ -156,7 +170,8 @@ CASES = {"pressure_source": _pressure_source, "flow_source": _flow_source,
          "valve": _valve, "thermal_volume": _thermal_volume,
          "thermal_chamber": _thermal_chamber, "thermal_inlet": _thermal_chamber,
          "check_valve": _check_valve, "accumulator": _accumulator, "pv_volume": _pv_volume,
-         "orifice": _orifice, "laminar_tube": _laminar_tube}
+         "orifice": _orifice, "laminar_tube": _laminar_tube,
+         "hysteretic_check_valve": _hysteretic_check_valve}
 
 
 def test_every_registered_family_has_a_conformance_case():
