@@ -74,7 +74,7 @@ class Problem:
                 stop(self._pool)
             self._pool = None
 
-    def evaluate(self, points: list[dict], desc: str = "design") -> list[dict]:
+    def evaluate(self, points: list[dict]) -> list[dict]:
         """Records (``params``, ``result``, ``error``) of ``points`` in order; a point
         evaluated before comes from the cache."""
         full = [dict(self.fixed, **p) for p in points]

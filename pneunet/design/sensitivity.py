@@ -48,17 +48,21 @@ def most_important(table) -> dict:
     return out
 
 
-def plot_tornado(table, nominal: dict, units: dict, path=None):
-    """One panel per metric: the metric's value ± one SD of each parameter (largest on top)."""
+def plot_tornado(table, nominal: dict, units: dict, path=None, top: int = 6):
+    """One panel per metric: the metric's value ± one SD of each parameter (the ``top``
+    largest, largest on top)."""
     from ..plotting import pyplot, save
 
     plt = pyplot()
     metrics = list(dict.fromkeys(table["metric"]))
-    fig, axes = plt.subplots(len(metrics), 1, figsize=(6.4, 1.0 + 0.45 * len(table)),
-                             squeeze=False)
+    shown = {m: table[table["metric"] == m].dropna(subset=["effect"]) for m in metrics}
+    shown = {m: g.reindex(g["effect"].abs().sort_values().index).tail(top)
+             for m, g in shown.items()}
+    bars = sum(max(1, len(g)) for g in shown.values())
+    fig, axes = plt.subplots(len(metrics), 1, figsize=(6.4, 1.0 + 0.45 * bars + 0.6 *
+                                                          len(metrics)), squeeze=False)
     for ax, metric in zip(axes[:, 0], metrics):
-        group = table[table["metric"] == metric].dropna(subset=["effect"])
-        group = group.reindex(group["effect"].abs().sort_values().index)
+        group = shown[metric]
         centre = nominal.get(metric, 0.0)
         effects = group["effect"].to_numpy()
         y = np.arange(len(group))

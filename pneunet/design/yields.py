@@ -113,7 +113,7 @@ def yield_analysis(problem: Problem, values: dict, spread, n: int = 1000, seed: 
     if nominal is None:
         nominal = problem.metrics(problem.evaluate([dict(values)])[0])
     points = [dict(values, **s) for s in spread.sample(n, seed)]
-    rows = problem.evaluate(points, desc="yield")
+    rows = problem.evaluate(points)
     table = pd.DataFrame([dict(p, **problem.metrics(r), error=r.get("error"))
                           for p, r in zip(points, rows)])
     keys = [t.key for t in problem.targets]
