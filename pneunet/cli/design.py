@@ -18,7 +18,8 @@ def register(subparsers) -> None:
                     "Example: pneunet design netlists/oscillator.pn --vary Rout=0.6:3 "
                     "--vary Rvent=1:10 --vary Vtank.V=40:400 --target period=3s "
                     "--target 'swing>=130kPa'. Exit code 1 when no point meets the targets.")
-    p.add_argument("netlist", metavar="FILE.pn", help="netlist to design")
+    p.add_argument("netlist", metavar="FILE.pn",
+                   help="netlist to design (without --vary: checked at its own values)")
     p.add_argument("--vary", action="append", default=[], metavar="NAME=LOW:HIGH",
                    help="a searched parameter (a .param name or ELEMENT.PARAM such as "
                         "Vtank.V), 0 < LOW < HIGH; repeatable")
@@ -76,9 +77,6 @@ def main(args) -> int:
     ranges = [parse_range(text) for text in args.vary]
     tolerances = [parse_tolerance(text) for text in args.tolerance]
     fits = [_element_file(text) for text in args.fit]
-    if not ranges and not args.n_yield:
-        raise ParameterError("nothing to do", hint="--vary NAME=LOW:HIGH to design, "
-                                                   "--yield N for the yield under spread")
     if not args.target:
         raise ParameterError("no target given", hint="e.g. --target period=3s")
     if (tolerances or fits) and not args.n_yield:

@@ -15,6 +15,9 @@ from ..analysis import sweep as S
 from .metrics import SpecMeasure
 from .spec import parse_targets
 
+#: batches larger than this draw a progress bar (not the Jacobian's few points)
+BAR_MIN_POINTS = 8
+
 
 class Problem:
     """``build``: a netlist path, a :class:`NetlistBuilder` or a picklable
@@ -84,7 +87,7 @@ class Problem:
             executor = self.executor or self._pool
             result = S.run_sweep(self.build, [p for _, p in todo], self.analysis,
                                  executor=executor, workers=1 if executor is None else None,
-                                 progress=self.progress and len(todo) > 1)
+                                 progress=self.progress and len(todo) > BAR_MIN_POINTS)
             rows = result.table.to_dict(orient="records")
             for (k, p), row in zip(todo, rows):
                 self._cache[k] = row

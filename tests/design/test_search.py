@@ -66,3 +66,22 @@ def test_a_wildcard_target_stands_for_every_matching_meas():
         ("sel0", ">=", 296.0), ("sel1", ">=", 296.0), ("period", "=", 3.0)]
     with pytest.raises(Exception, match="no .meas name matches 'act\\*'"):
         parse_targets(["act*>=1kPa"], measures)
+
+
+
+def test_fill_time_target_is_the_netlists_meas(capsys):
+    """An actuator fill time (.meas FILLTIME) as a target, checked at the netlist's own
+    values (no --vary): the achieved value is the one the netlist runner measures."""
+    from pathlib import Path
+
+    from pneunet.netlist import parse_file
+    from pneunet.netlist.runner import run_deck
+
+    netlist = str(Path(__file__).resolve().parents[2] / "netlists" / "fill_time.pn")
+    fill = run_deck(parse_file(netlist)).measures["fill_valve"]  # 0.136 s
+    assert main(["design", netlist, "--target", "fill_valve<=140ms", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["metrics"]["fill_valve"] == pytest.approx(fill) and out["values"] == {}
+    assert main(["design", netlist, "--target", "fill_valve<=130ms", "--json"]) == 1
+    row = json.loads(capsys.readouterr().out)["targets"][0]
+    assert not row["met"] and row["miss"] == pytest.approx(fill - 0.130)
