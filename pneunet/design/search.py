@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -47,7 +47,6 @@ class DesignResult(Summarized):
     failed_simulations: int
     starts: int
     wall_time_s: float
-    history: list = field(default_factory=list)
 
     def _summary(self):
         rows = [("values", listed(f"{k}={v:.4g}" for k, v in self.values.items())),

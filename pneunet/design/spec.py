@@ -42,9 +42,9 @@ TARGET_HINT = "e.g. period=3s, period=3s±0.1s, duty=0.4±10%, swing>=130kPa, p_
 
 @dataclass(frozen=True)
 class Target:
-    """One requirement on a metric: ``op`` is '=', '>=' or '<='; ``value``, ``tol`` (the
-    half-width of '=') and ``scale`` (the miss counted as one unit in the search) in the
-    metric's internal unit; ``source`` is 'meas' (a netlist .meas) or 'builtin'."""
+    """One requirement on a metric: ``op`` is '=', '>=' or '<='; ``value`` and ``tol`` (the
+    half-width of '=', and the miss counted as one unit by the search) in the metric's
+    internal unit; ``source`` is 'meas' (a netlist .meas) or 'builtin'."""
 
     metric: str
     node: str | None
@@ -58,10 +58,6 @@ class Target:
     @property
     def key(self) -> str:
         return f"{self.metric}@{self.node}" if self.node else self.metric
-
-    @property
-    def scale(self) -> float:
-        return self.tol
 
     def met(self, m: float) -> bool:
         if m is None or not math.isfinite(m):
@@ -80,12 +76,12 @@ class Target:
         return max(0.0, self.value - m) if self.op == ">=" else max(0.0, m - self.value)
 
     def residual(self, m: float, margin: float = 0.25) -> float:
-        """The search's residual in units of ``scale``: (m − value)/tol for '=', for an
-        inequality the shortfall past ``value`` moved ``margin`` scales inside."""
+        """The search's residual in units of ``tol``: (m − value)/tol for '=', for an
+        inequality the shortfall past ``value`` moved ``margin`` tolerances inside."""
         if self.op == "=":
             return (m - self.value) / self.tol
         sign = 1.0 if self.op == ">=" else -1.0
-        return max(0.0, margin - sign * (m - self.value) / self.scale)
+        return max(0.0, margin - sign * (m - self.value) / self.tol)
 
     def describe(self) -> str:
         tol = f"±{self.tol:.4g}" if self.op == "=" else ""

@@ -85,10 +85,12 @@ class YieldResult(Summarized):
                      f"at most {TOP} parameters per metric, all in the JSON):")
         table = self.sensitivities.assign(order=-self.sensitivities["share"].fillna(0))
         top = table.sort_values(["order"], kind="stable").groupby("metric", sort=False).head(TOP)
+        wm = max(map(len, table["metric"]), default=0)
+        wp = max(map(len, table["parameter"]), default=0)
         for row in top.loc[table.index.intersection(top.index)].itertuples():
             effect = "n/a (too few samples)" if math.isnan(row.effect) else \
                 f"{row.effect:+.4g} {self.units.get(row.metric, '')}  share {row.share:.0%}"
-            lines.append(f"  {row.metric:<12} {row.parameter:<14} SD {row.sd:<9.4g} "
+            lines.append(f"  {row.metric:<{wm}}  {row.parameter:<{wp}}  SD {row.sd:<9.4g} "
                          f"effect {effect}")
         lines += [f"  most important for {k}: {v}" for k, v in self.most_important.items()]
         lines += [f"note: {n}" for n in self.notes]
