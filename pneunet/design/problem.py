@@ -51,8 +51,25 @@ class Problem:
         self._cache: dict = {}
 
     def check(self, point: dict) -> None:
-        """Every name of ``point`` exists (did-you-mean otherwise), before simulating."""
-        S.check_points(self.build, [dict(self.fixed, **point)])
+        """Every name of ``point`` exists (did-you-mean otherwise), before simulating; a
+        plain name that is no ``.param`` but an element parameter names ELEMENT.PARAM."""
+        from ..errors import PneunetError
+
+        try:
+            S.check_points(self.build, [dict(self.fixed, **point)])
+        except PneunetError as err:
+            plain = [k for k in point if "." not in k]
+            if not plain or not isinstance(self.build, S.NetlistBuilder):
+                raise
+            circuit = self.build.deck().circuit
+            for name in plain:
+                owners = [f"{e}.{name}" for e, spec in circuit.elements.items()
+                          if name in spec.params]
+                if owners and f"{name!r}" in err.message:
+                    raise type(err)(err.message, where=err.where,
+                                    hint=f"an element parameter is ELEMENT.PARAM: "
+                                         f"{', '.join(owners)}") from None
+            raise
 
     def __enter__(self):
         """One process pool for every batch until the outermost ``with`` ends."""

@@ -45,6 +45,7 @@ def test_unreachable_target_reports_closest_design_and_limiting_bound(short_osci
     (["--vary", "Rout=-1:3"], "low end -1 is not positive"),
     (["--vary", "Rot=0.6:3"], "did you mean 'Rout'?"),
     (["--vary", "Vtnk.V=40:400"], "did you mean 'Vtank'?"),
+    (["--vary", "V=40:400"], "an element parameter is ELEMENT.PARAM: Vtank.V"),
     (["--vary", "Rout=0.6:3", "--target", "perod=3s"], "did you mean 'period'?"),
     (["--vary", "Rout=0.6:3", "--target", "period=3kPa"], "needs s, got kPa"),
 ])
