@@ -14,8 +14,8 @@ def register(subparsers) -> None:
                     "parameters, on the sweep machinery (local process pool or dask). "
                     "When no point meets the targets, the closest design is reported with "
                     "its misses and the bounds that limit it. See docs/design.md. "
-                    "Example: pneunet design netlists/oscillator.pn --vary Rout=0.6:3 "
-                    "--vary Rvent=1:10 --vary Vtank.V=40:400 --target period=3s "
+                    "Example: pneunet design netlists/oscillator_design.pn --vary Rout=0.6:3 "
+                    "--vary Rvent=1:10 --vary V=40:400 --target period=3s "
                     "--target 'swing>=130kPa'. Exit code 1 when no point meets the targets.")
     p.add_argument("netlist", metavar="FILE.pn",
                    help="netlist to design (without --vary: checked at its own values)")
@@ -34,7 +34,7 @@ def register(subparsers) -> None:
                         "parameter, at least 8)")
     p.add_argument("--max-evaluations", type=int, default=25, metavar="N",
                    help="least-squares iterations per start (default 25)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the Latin hypercube")
+    p.add_argument("--seed", type=int, default=0, help="seed of the Latin hypercube and the yield's samples")
     p.add_argument("--workers", type=int, default=None,
                    help="local worker processes (default: all cores; 1 = no pool)")
     p.add_argument("--dask", metavar="ADDRESS", default=None,
