@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import resource
 import time
 from pathlib import Path
 
@@ -38,12 +39,18 @@ def main():
         y = yield_analysis(problem, result.values, spread, n=args.samples, seed=0,
                            nominal=result.metrics)
     total = time.perf_counter() - start
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)  # the pool's workers, reaped
+    cpu = usage.ru_utime + usage.ru_stime
+    sims = result.simulations + y.simulations
     print(result.report())
     print(y.report())
     print(f"search: {t_search:.1f} s, {result.simulations} simulations; yield: "
           f"{y.wall_time_s:.1f} s, {y.simulations} simulations; total {total:.1f} s on "
           f"{args.workers} workers (target ≤ 60 s); load average "
           f"{', '.join(f'{x:.2f}' for x in os.getloadavg())}")
+    if cpu:
+        print(f"workers' CPU {cpu:.1f} s = {cpu / sims * 1e3:.0f} ms per simulation: "
+              f"{cpu / args.workers:.1f} s of wall time on {args.workers} idle cores")
 
 
 if __name__ == "__main__":
