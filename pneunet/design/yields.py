@@ -17,19 +17,16 @@ from ..reprs import Summarized
 from .problem import Problem
 from .sensitivity import most_important, plot_tornado, sensitivities
 
-Z95 = 1.959963984540054
 #: parameters per metric in the text report
 TOP = 3
 
 
-def wilson(passed: int, n: int, z: float = Z95) -> tuple:
-    """The Wilson score interval of a binomial proportion passed/n."""
-    if n == 0:
-        return (0.0, 1.0)
-    p = passed / n
-    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
-    half = z / (1 + z * z / n) * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n))
-    return (max(0.0, centre - half), min(1.0, centre + half))
+def wilson(passed: int, n: int) -> tuple:
+    """The 95 % Wilson score interval of a binomial proportion passed/n (scipy's)."""
+    from scipy.stats import binomtest
+
+    ci = binomtest(passed, n).proportion_ci(0.95, method="wilson")
+    return (float(ci.low), float(ci.high))
 
 
 @dataclass(repr=False)
