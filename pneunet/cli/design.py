@@ -51,6 +51,9 @@ def register(subparsers) -> None:
     y.add_argument("--fit", action="append", default=[], metavar="ELEMENT=FIT.json",
                    help="a valve's fitted covariance from 'pneunet fit DATA.csv --json', "
                         "centred on the netlist's values, e.g. X1=fit.json")
+    y.add_argument("--derivatives", action="store_true",
+                   help="also the effects of ±1 SD by central differences at the design "
+                        "(2 simulations per spread parameter): a check of linearity")
     y.add_argument("--tornado", metavar="PNG", default=None, help="write the tornado plot")
     y.add_argument("--samples", metavar="CSV", default=None,
                    help="write the yield samples (parameters, metrics, pass)")
@@ -101,7 +104,7 @@ def main(args) -> int:
                 spread = combined(problem, result.values, tolerances, fits,
                                   args.tolerance_dist)
                 y = yield_analysis(problem, result.values, spread, args.n_yield, args.seed,
-                                   nominal=result.metrics)
+                                   nominal=result.metrics, derivatives=args.derivatives)
         if args.n_yield:
             out["yield"] = y.to_json()
             if args.tornado:

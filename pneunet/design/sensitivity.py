@@ -1,41 +1,60 @@
 """Which parameter's spread matters most: first-order sensitivities from Monte Carlo samples.
 
 For each metric, a linear regression on the sampled parameters gives the slope b_j; the
-effect of one standard deviation of parameter j is b_j·σ_j (metric units) and its share
-of the metric's variance (b_j·σ_j)²/Var(metric) (the squared standardized regression
-coefficient: a variance-based first-order index when the parameters are independent and
-the metric is near-linear over the spread; ``r2`` says how near).  Samples whose metric
-was not measured are left out.  :func:`plot_tornado` draws the effects.
+effect of one standard deviation σ_j of parameter j's distribution is b_j·σ_j (metric
+units) and its share of the metric's variance (b_j·σ_j)²/(Σ_k (b_k·σ_k)² + residual
+variance): the variance of the linear model with independent parameters, a first-order
+variance-based index where the metric is near-linear over the spread (``r2`` says how
+near; the shares add up to about ``r2``).  Samples whose metric
+was not measured are left out.  :func:`derivative_effects` gives the same effects from
+central differences at the design, and :func:`plot_tornado` draws them.
 """
 from __future__ import annotations
 
 import numpy as np
 
 
-def sensitivities(samples, parameters: list, metrics: list):
-    """A table (metric, parameter, sd, effect, share, r2) from the samples table."""
+def sensitivities(samples, sds: dict, metrics: list):
+    """A table (metric, parameter, sd, effect, share, r2, samples) from the samples table;
+    ``sds``: {parameter: standard deviation of its distribution}."""
     import pandas as pd
 
+    parameters = list(sds)
+    sd = np.array([sds[k] for k in parameters])
     rows = []
     for metric in metrics:
         y = samples[metric].to_numpy(float)
         X = samples[parameters].to_numpy(float)
         ok = np.isfinite(y) & np.all(np.isfinite(X), axis=1)
         y, X = y[ok], X[ok]
-        sd = X.std(axis=0, ddof=1) if len(y) > 1 else np.zeros(len(parameters))
         var = y.var(ddof=1) if len(y) > 1 else 0.0
-        if len(y) <= len(parameters) + 1 or var == 0 or not np.all(sd > 0):
-            b, r2 = np.full(len(parameters), np.nan), np.nan
+        if len(y) <= len(parameters) + 1 or var == 0:
+            effects, r2, total = np.full(len(parameters), np.nan), np.nan, np.nan
         else:
-            A = np.column_stack([np.ones(len(y)), (X - X.mean(axis=0)) / sd])
+            A = np.column_stack([np.ones(len(y)), X - X.mean(axis=0)])
             coef, *_ = np.linalg.lstsq(A, y, rcond=None)
-            b = coef[1:]
-            r2 = 1 - np.sum((y - A @ coef) ** 2) / np.sum((y - y.mean()) ** 2)
+            residual = np.sum((y - A @ coef) ** 2)
+            effects = coef[1:] * sd
+            r2 = 1 - residual / np.sum((y - y.mean()) ** 2)
+            total = np.sum(effects ** 2) + residual / (len(y) - len(parameters) - 1)
         for j, name in enumerate(parameters):
             rows.append({"metric": metric, "parameter": name, "sd": float(sd[j]),
-                         "effect": float(b[j]), "share": float(b[j] ** 2 / var) if var else
-                         np.nan, "r2": float(r2), "samples": int(len(y))})
+                         "effect": float(effects[j]), "share": float(effects[j] ** 2 / total),
+                         "r2": float(r2), "samples": int(len(y))})
     return pd.DataFrame(rows)
+
+
+def derivative_effects(problem, values: dict, spread) -> dict:
+    """{(metric, parameter): (m(x + σ) − m(x − σ))/2}: central differences of one SD at
+    the design, the other parameters at their nominal values (2 simulations per
+    parameter, one parallel batch).  Where they agree with the regression's effects the
+    metric is linear over the spread."""
+    names = spread.names
+    points = [dict(values, **{k: spread.centre(k) + sign * spread.sd(k)})
+              for k in names for sign in (1, -1)]
+    metrics = [problem.metrics(r) for r in problem.evaluate(points)]
+    return {(t.key, k): 0.5 * (metrics[2 * j][t.key] - metrics[2 * j + 1][t.key])
+            for j, k in enumerate(names) for t in problem.targets}
 
 
 def most_important(table) -> dict:

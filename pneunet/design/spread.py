@@ -45,6 +45,16 @@ class Spread:
                 return math.sqrt(cov[names.index(name), names.index(name)])
         raise KeyError(name)
 
+    def centre(self, name: str) -> float:
+        """The nominal (mean) value of ``name``."""
+        if name in self.independent:
+            d = self.independent[name]
+            return d.mean if isinstance(d, S.Normal) else 0.5 * (d.low + d.high)
+        for names, mean, _ in self.groups:
+            if name in names:
+                return float(mean[names.index(name)])
+        raise KeyError(name)
+
     def sample(self, n: int, seed: int = 0) -> list[dict]:
         points = S.monte_carlo(self.independent, n, seed) if self.independent else \
             [{} for _ in range(n)]

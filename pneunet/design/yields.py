@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 from ..reprs import Summarized
 from .problem import Problem
-from .sensitivity import most_important, plot_tornado, sensitivities
+from .sensitivity import derivative_effects, most_important, plot_tornado, sensitivities
 
 #: parameters per metric in the text report
 TOP = 3
@@ -87,6 +87,8 @@ class YieldResult(Summarized):
         for row in top.loc[table.index.intersection(top.index)].itertuples():
             effect = "n/a (too few samples)" if math.isnan(row.effect) else \
                 f"{row.effect:+.4g} {self.units.get(row.metric, '')}  share {row.share:.0%}"
+            if hasattr(row, "effect_fd"):
+                effect += f"  (derivative: {row.effect_fd:+.4g})"
             lines.append(f"  {row.metric:<{wm}}  {row.parameter:<{wp}}  SD {row.sd:<9.4g} "
                          f"effect {effect}")
         lines += [f"  most important for {k}: {v}" for k, v in self.most_important.items()]
@@ -98,10 +100,11 @@ class YieldResult(Summarized):
 
 
 def yield_analysis(problem: Problem, values: dict, spread, n: int = 1000, seed: int = 0,
-                   nominal: dict | None = None) -> YieldResult:
+                   nominal: dict | None = None, derivatives: bool = False) -> YieldResult:
     """Monte Carlo yield of the design ``values`` under ``spread`` (module docstring);
     ``problem`` runs the simulations (use it as a context manager for one pool);
-    ``nominal`` the metrics at the design (simulated if not given)."""
+    ``nominal`` the metrics at the design (simulated if not given); ``derivatives``: add
+    the central-difference effects (column ``effect_fd``, 2 simulations per parameter)."""
     import pandas as pd
 
     from ..errors import ParameterError
@@ -120,7 +123,10 @@ def yield_analysis(problem: Problem, values: dict, spread, n: int = 1000, seed: 
     table["pass"] = pd.concat(ok, axis=1).all(axis=1)
     passed = int(table["pass"].sum())
     p = passed / n
-    sens = sensitivities(table, spread.names, keys)
+    sens = sensitivities(table, {k: spread.sd(k) for k in spread.names}, keys)
+    if derivatives:
+        fd = derivative_effects(problem, values, spread)
+        sens["effect_fd"] = [fd[m, k] for m, k in zip(sens["metric"], sens["parameter"])]
     return YieldResult(yield_=p, se=math.sqrt(p * (1 - p) / n), interval=wilson(passed, n),
                        passed=passed, n=n, failed_simulations=int(table["error"].notna().sum()),
                        per_target={k: float(v.mean()) for k, v in ok.items()},

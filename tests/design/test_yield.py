@@ -27,7 +27,7 @@ def test_yield_equals_brute_force_of_the_same_samples(short_oscillator, tmp_path
     samples = tmp_path / "samples.csv"
     main(["design", str(short_oscillator), "--target", "period=3s±0.1s", "--yield", str(n),
           "--seed", str(seed), "--tolerance", "*.pclose=±5kPa", "--tolerance", "Rvent=±0.5%",
-          "--samples", str(samples), "--workers", "2", "--json"])
+          "--samples", str(samples), "--derivatives", "--workers", "2", "--json"])
     out = json.loads(capsys.readouterr().out)["yield"]
     # the same samples drawn here: uniform p_close 96.42 ± 5 kPa, then R_vent 3 ± 0.5 %
     rng = np.random.default_rng(seed)
@@ -46,6 +46,16 @@ def test_yield_equals_brute_force_of_the_same_samples(short_oscillator, tmp_path
     lo, hi = out["interval95"]
     assert lo < p < hi
     assert out["most_important"] == {"period": "X1.pclose"}
+    # p_close's effect of one SD (10/√12 kPa): the derivative by brute force, and the
+    # regression on the samples agree with it (the period is near-linear in p_close)
+    sd = 10 / math.sqrt(12)
+    row = next(r for r in out["sensitivities"] if r["parameter"] == "X1.pclose")
+    derivative = 0.5 * (brute_force_period(short_oscillator, 3.0, 96.42 + sd)
+                        - brute_force_period(short_oscillator, 3.0, 96.42 - sd))
+    assert row["sd"] == pytest.approx(sd)
+    assert row["effect_fd"] == pytest.approx(derivative, rel=1e-3)
+    assert row["effect"] == pytest.approx(derivative, rel=0.1)
+    assert 0.8 < row["share"] <= 1
 
 
 def test_yield_under_a_fitted_covariance(short_oscillator, tmp_path, capsys):
