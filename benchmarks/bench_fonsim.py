@@ -1,0 +1,103 @@
+"""FONSim against pneunet on the same equations (issue 14).
+
+* fill (N = 1): a 50 mL container filled from atmosphere to 3 bar absolute through an
+  orifice (FONSim ``FlowRestrictor``, d = 0.5 mm, K = 0.6; pneunet's quadrature resistor
+  with R = 4/(πd²)·√(K·p_atm/ρ_stp), the same law), 2 s;
+* chain: N such restrictor–container cells in series fed by that step, 2 s.
+
+Both use FONSim's gas (ρ_stp = 1.23 kg/m³ at 1.013 bar): pneunet's temperature is set so
+that M/(R·T) = ρ_stp/p_atm, and its flow band is 1e-3 kPa² (FONSim's law has none).
+Errors are the largest deviation of any container's pressure from pneunet at
+rtol = atol = 1e-10 on a 10 ms grid, in kPa (no reference above N = 1000).  FONSim runs with its defaults and
+``step=(1e-4, 1e-2)``; it is skipped with a note when it is not installed
+(``pip install fonsim``).  Wall times of the simulation only (build excluded), s.
+
+Run:  python benchmarks/bench_fonsim.py [--sizes 1,10,30,100,300] [--fonsim-max 100]
+"""
+from __future__ import annotations
+
+import argparse
+import contextlib
+import io
+import math
+import time
+
+import numpy as np
+
+P_ATM, RHO_STP, M_AIR, R_GAS = 1.013e5, 1.23, 28.965e-3, 8.314  # FONSim's constants, SI
+D, K_FACTOR, VOLUME, P_SUPPLY = 0.5e-3, 0.6, 50e-6, 3.0e5
+GRID = np.arange(0.0, 2.0 + 1e-9, 0.01)
+
+
+def pneunet_chain(n, t_stop=2.0, rtol=1e-5):
+    """pneunet: (every container's pressure on GRID (n_t, n) in kPa, seconds)."""
+    from pneunet import AIR, Circuit
+
+    temperature = AIR.molar_mass_g_mol * 1e-3 * P_ATM / (R_GAS * RHO_STP)
+    r = 4 / (math.pi * D ** 2) * math.sqrt(K_FACTOR * P_ATM / RHO_STP) * 1e-9  # kPa·s/mg
+    c = Circuit(f"chain {n}", ambient=P_ATM / 1e3, temperature=temperature, flow_band=1e-3,
+                rtol=rtol, atol=rtol)
+    c.pressure_source("P1", "n0", P_SUPPLY / 1e3)
+    for k in range(1, n + 1):
+        c.resistor(f"R{k}", f"n{k - 1}", f"n{k}", R=r)
+        c.volume(f"V{k}", f"n{k}", V=VOLUME * 1e6)
+    start = time.perf_counter()
+    sol = c.tran(t_stop, t_step=0.01)
+    seconds = time.perf_counter() - start
+    grid = GRID[GRID <= t_stop]
+    return np.column_stack([np.interp(grid, sol.t, sol.pressure(f"n{k}"))
+                            for k in range(1, n + 1)]), seconds
+
+
+def fonsim_chain(n, t_stop=2.0):
+    """FONSim: (every container's pressure on GRID (n_t, n) in kPa, seconds), or None."""
+    try:
+        import fonsim as fons
+    except ImportError:
+        return None
+    system = fons.System(f"chain {n}")
+    system.add(fons.PressureSource("source", pressure=P_SUPPLY))
+    for k in range(1, n + 1):
+        system.add(fons.FlowRestrictor(f"r{k}", fluid=fons.air, diameter=D, k=K_FACTOR))
+        system.add(fons.Container(f"c{k}", fluid=fons.air, volume=VOLUME))
+    system.connect("source", "r1")
+    for k in range(1, n):
+        system.connect_common(f"r{k}", f"c{k}", f"r{k + 1}")
+    system.connect(f"r{n}", f"c{n}")
+    with contextlib.redirect_stdout(io.StringIO()):
+        sim = fons.Simulation(system, duration=t_stop, step=(1e-4, 1e-2))
+        start = time.perf_counter()
+        sim.run()
+        seconds = time.perf_counter() - start
+    grid = GRID[GRID <= t_stop]
+    return np.column_stack([np.interp(grid, sim.times, system.get(f"c{k}").get("pressure") / 1e3)
+                            for k in range(1, n + 1)]), seconds
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--sizes", default="1,10,30,100,300,1000,10000")
+    parser.add_argument("--fonsim-max", type=int, default=100,
+                        help="largest N given to FONSim (its time grows fast with N)")
+    args = parser.parse_args(argv)
+    try:
+        import fonsim  # noqa: F401
+        have_fonsim = True
+    except ImportError:
+        have_fonsim = False
+        print("note: FONSim is not installed (pip install fonsim): its columns are empty")
+    print("| N | pneunet s | pneunet error kPa | FONSim s | FONSim error kPa |")
+    print("|---|---|---|---|---|")
+    pneunet_chain(1)  # warm up: imports and first-call costs
+    for n in (int(s) for s in args.sizes.split(",")):
+        ref, _ = pneunet_chain(n, rtol=1e-10) if n <= 1000 else (None, None)
+        ours, ours_s = pneunet_chain(n)
+        theirs = fonsim_chain(n) if have_fonsim and n <= args.fonsim_max else None
+        err = (lambda p: f"{np.max(np.abs(p - ref)):.2g}" if ref is not None else "—")
+        cells = [f"{ours_s:.2f}", err(ours)]
+        cells += [f"{theirs[1]:.2f}", err(theirs[0])] if theirs else ["—", "—"]
+        print(f"| {n} | " + " | ".join(cells) + " |", flush=True)
+
+
+if __name__ == "__main__":
+    main()
