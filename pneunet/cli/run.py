@@ -23,6 +23,10 @@ def register(subparsers) -> None:
     p.add_argument("--plot", action="store_true", help="also write a PNG plot per transient")
     p.add_argument("--json", action="store_true",
                    help="print measurements and written files as JSON on stdout")
+    p.add_argument("--run-file", choices=("json", "npz"), default=None,
+                   help="also write each transient whole to one file (every signal with its "
+                        "unit, solver stats, the circuit as netlist text, options, versions); "
+                        "pneunet.read_run loads it back")
     p.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     netlist_args.add(p)
@@ -112,6 +116,9 @@ def main(args) -> int:
             csv = out_dir / f"{name}.csv"
             write_csv(csv, table)
             files.append(str(csv))
+            if args.run_file and analysis.kind == "tran":
+                files.append(str(result.save(out_dir / f"{name}.{args.run_file}", d.circuit)))
+                say(f"  .tran: wrote {files[-1]}")
             if args.plot and analysis.kind == "tran":
                 png = out_dir / f"{name}.png"
                 result.plot(png, signals=saves or None)

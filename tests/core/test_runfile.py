@@ -55,3 +55,19 @@ def test_bad_run_files_are_named_errors(tmp_path):
     (tmp_path / "broken.npz").write_bytes(b"PK\x03\x04 not a zip")
     with pytest.raises(DataError, match="cannot read a run file"):
         read_run(tmp_path / "broken.npz")
+
+
+def test_run_command_writes_the_whole_transient(tmp_path):
+    from pathlib import Path
+
+    from pneunet.cli import main
+
+    netlist = Path(__file__).parents[2] / "netlists" / "oscillator.pn"
+    assert main(["run", str(netlist), "-q", "-o", str(tmp_path), "--run-file", "npz"]) == 0
+    run = read_run(tmp_path / "tran.npz")
+    header = (tmp_path / "tran.csv").read_text().splitlines()[0].split(",")
+    columns = np.loadtxt(tmp_path / "tran.csv", delimiter=",", skiprows=1)
+    np.testing.assert_allclose(run.solution.t, columns[:, 0], rtol=1e-8)
+    tank = header.index("p_tank_kPa")
+    np.testing.assert_allclose(run.solution.pressure("tank"), columns[:, tank], rtol=1e-8)
+    assert "tank" in run.netlist and run.solution.stats["steps"] > 0
