@@ -159,6 +159,14 @@ def from_fit(problem, point: dict, element: str, fit) -> Spread:
         spread.notes.append(f"{element}: the circuit's {', '.join(far)} differ from the fit's "
                             "values by more than 3 standard errors; the spread is centred on "
                             "the circuit's values")
+    sd = np.sqrt(np.diag(matrix))
+    r = matrix / np.outer(sd, sd) - np.eye(len(names))
+    i, j = np.unravel_index(np.argmax(np.abs(r)), r.shape)
+    if abs(r[i, j]) > 0.5:
+        spread.notes.append(f"{element}: the fitted parameters are correlated (r = "
+                            f"{r[i, j]:+.2f} between {names[i]} and {names[j]}): the "
+                            "sensitivities move one parameter at a time, and the effects of "
+                            "correlated parameters partly cancel in the samples")
     if cov is None:
         spread.notes.append(f"{element}: the fit has no covariance (older pneunet fit): "
                             "parameters taken as independent")
