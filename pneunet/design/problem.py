@@ -70,6 +70,23 @@ class Problem:
                                     hint=f"an element parameter is ELEMENT.PARAM: "
                                          f"{', '.join(owners)}") from None
             raise
+        self._check_nodes(point)
+
+    def _check_nodes(self, point: dict) -> None:
+        """The nodes of the built-in metrics exist (did-you-mean otherwise)."""
+        from ..errors import ParameterError
+        from .metrics import control_node
+
+        builtin = [t for t in self.targets if t.source == "builtin"]
+        if not builtin:
+            return
+        full = dict(self.fixed, **point)
+        circuit = S.apply_overrides(self.build(full), full)
+        for t in builtin:
+            node = t.node or self.analysis.node or control_node(circuit)
+            if node not in circuit.nodes:
+                raise ParameterError(f"target {t.text!r}: no node {node!r}",
+                                     hint=S._did_you_mean(node, circuit.nodes, "nodes"))
 
     def __enter__(self):
         """One process pool for every batch until the outermost ``with`` ends."""
