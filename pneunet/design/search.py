@@ -25,7 +25,7 @@ import numpy as np
 
 from ..reprs import Summarized, listed
 from .problem import Problem
-from .spec import Range, make_range, parse_range
+from .spec import Range, make_range, parse_range, require_whole
 
 PENALTY = 30.0
 
@@ -91,15 +91,11 @@ def design(build, ranges, targets=None, *, n_start: int | None = None, tries: in
     targets); see the module docstring.  ``n_start``: Latin-hypercube points (default 6
     per parameter, at least 8); ``options``: those of :class:`Problem` (``node``,
     ``t_stop``, ``fixed``, ``workers``, ``executor``, ``progress``)."""
-    from ..errors import ParameterError
-
     start_time = time.perf_counter()
-    for name, value, at_least in (("n_start", n_start, 1), ("max_nfev", max_nfev, 1),
-                                  ("tries", tries, 1)):
-        if value is not None and not (isinstance(value, int) and value >= at_least):
-            raise ParameterError(f"design: {name} must be a whole number ≥ {at_least}, got "
-                                 f"{value!r}", hint="--starts N and --max-evaluations N "
-                                                    "take N ≥ 1")
+    for name, value, at_least in (("n_start (--starts)", n_start or 1, 1), ("tries", tries, 1),
+                                  ("max_nfev (--max-evaluations)", max_nfev, 1),
+                                  ("seed", seed, 0)):
+        require_whole(f"design: {name}", value, at_least)
     ranges = _ranges(ranges)
     problem = build if isinstance(build, Problem) else Problem(build, targets, **options)
     lo = np.log([r.low for r in ranges])

@@ -214,10 +214,16 @@ def parse_tolerance(text: str) -> Tolerance:
         raise ParameterError(f"cannot read tolerance {text!r}", hint=hint)
     amount = spec[pm.end():].strip()
     number = _QUANTITY_NUMBER.match(amount)
-    if not number or not float(number.group(1)) > 0:
+    if not number or not 0 < float(number.group(1)) < math.inf:
         raise ParameterError(f"tolerance {text!r}: the spread must be a positive number",
                              hint=hint)
     return Tolerance(name.strip(), amount)
+
+
+def require_whole(what: str, value, at_least: int) -> None:
+    """A ParameterError unless ``value`` is an int ≥ ``at_least`` (counts and seeds)."""
+    if isinstance(value, bool) or not isinstance(value, int) or value < at_least:
+        raise ParameterError(f"{what} must be a whole number ≥ {at_least}, got {value!r}")
 
 
 def _number(text: str, what: str) -> float:

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 from ..reprs import Summarized
 from .problem import Problem
 from .sensitivity import derivative_effects, most_important, plot_tornado, sensitivities
+from .spec import require_whole
 
 #: parameters per metric in the text report
 TOP = 3
@@ -107,10 +108,8 @@ def yield_analysis(problem: Problem, values: dict, spread, n: int = 1000, seed: 
     the central-difference effects (column ``effect_fd``, 2 simulations per parameter)."""
     import pandas as pd
 
-    from ..errors import ParameterError
-
-    if n < 1:
-        raise ParameterError(f"a yield needs at least one sample, got {n}")
+    require_whole("yield: the number of samples (--yield)", n, 1)
+    require_whole("yield: seed", seed, 0)
     start, sims = time.perf_counter(), problem.simulations
     if nominal is None:
         nominal = problem.metrics(problem.evaluate([dict(values)])[0])

@@ -49,7 +49,7 @@ def test_unreachable_target_reports_closest_design_and_limiting_bound(short_osci
     (["--vary", "Rout=0.6:3", "--target", "perod=3s"], "did you mean 'period'?"),
     (["--vary", "Rout=0.6:3", "--target", "period=3kPa"], "needs s, got kPa"),
     (["--vary", "Rout=0.6:3", "--target", "duty@tnk=0.4"], "did you mean 'tank'?"),
-    (["--vary", "Rout=0.6:3", "--starts", "-3"], "n_start must be a whole number ≥ 1"),
+    (["--vary", "Rout=0.6:3", "--starts", "-3"], "n_start (--starts) must be a whole number ≥ 1"),
 ])
 def test_bad_input_is_exit_2_before_simulating(short_oscillator, capsys, args, message):
     argv = ["design", str(short_oscillator), "--json"] + args
