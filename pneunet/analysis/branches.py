@@ -317,11 +317,22 @@ def predicted_regime(**kw) -> str:
     return stationary_branches(OscillatorSpec(**kw)).regime
 
 
+#: element kinds that are the oscillator's volume (port 0 at the control node)
+VOLUME_KINDS = ("volume", "actuator", "thermal_volume", "thermal_chamber")
+
+
 def spec_from_circuit(circuit, node: str | None = None) -> OscillatorSpec:
     """Recognise the oscillator in a circuit: a valve fed by a pressure source whose
     output reaches its own control node through a resistor (or directly), the control
-    node vented through a resistor to a pressure source or the ambient."""
+    node vented through a resistor to a pressure source or the ambient.  A volume with
+    an energy balance counts as the volume: a ``thermal_inlet``'s line node as its
+    chamber's node."""
     els = circuit.elements
+    chamber_of = {e.nodes[0]: e.nodes[1] for e in els.values() if e.kind == "thermal_inlet"}
+
+    def at(r):  # a resistor's nodes, a link into a chamber read as the chamber
+        return {chamber_of.get(n, n) for n in r.nodes}
+
     pinned = {}
     for e in els.values():
         if e.kind == "pressure_source":
@@ -336,16 +347,16 @@ def spec_from_circuit(circuit, node: str | None = None) -> OscillatorSpec:
             continue
         rout = 0.0
         if outlet != ctrl:
-            links = [r for r in els.values() if r.kind == "resistor" and set(r.nodes) == {outlet, ctrl}]
+            links = [r for r in els.values() if r.kind == "resistor" and at(r) == {outlet, ctrl}]
             if not links:
                 continue
             rout = float(links[0].params["R"])
-        vents = [r for r in els.values() if r.kind == "resistor" and ctrl in r.nodes
-                 and (set(r.nodes) - {ctrl}) & set(pinned) and set(r.nodes) != {outlet, ctrl}]
+        vents = [r for r in els.values() if r.kind == "resistor" and ctrl in at(r)
+                 and (at(r) - {ctrl}) & set(pinned) and at(r) != {outlet, ctrl}]
         if not vents:
             continue
-        low = (set(vents[0].nodes) - {ctrl}).pop()
-        vols = [x for x in els.values() if x.kind in ("volume", "actuator") and x.nodes[0] == ctrl]
+        low = (at(vents[0]) - {ctrl}).pop()
+        vols = [x for x in els.values() if x.kind in VOLUME_KINDS and x.nodes[0] == ctrl]
         V = float(vols[0].params["V"]) if vols else float("nan")
         return OscillatorSpec(pH=pinned[inlet], pL=pinned[low], Rout=rout,
                               Rvent=float(vents[0].params["R"]), valve=v.params["model"], V=V)

@@ -51,3 +51,19 @@ def test_spec_from_netlist_and_plot(tmp_path):
     assert spec.Rout == pytest.approx(1.132) and spec.Rvent == 3 and spec.pL == 96
     png = plot_branches(stationary_branches(spec), tmp_path / "b.png")
     assert png.stat().st_size > 10_000
+
+
+def test_oscillator_recognised_with_an_energy_balance_in_its_tank():
+    """With the tank's energy balance (a thermal_chamber fed through one thermal_inlet
+    per line) the circuit is still the oscillator: same R_out, R_vent, V, so a trace fit
+    of that model starts from the branches like the isothermal one."""
+    from pneunet.analysis.branches import spec_from_circuit
+    from pneunet.analysis.circuits import oscillator
+    from pneunet.traces.effects import candidates_for
+
+    c = oscillator({"V": 50.0, "Rout": 1.3, "Rvent": 4.0})
+    heat = next(e for e in candidates_for(c) if e.name == "volume_heat_transfer")
+    heat.apply(c, {"tau": 0.3})
+    assert {s.kind for s in c.elements.values()} >= {"thermal_chamber", "thermal_inlet"}
+    spec = spec_from_circuit(c)
+    assert (spec.Rout, spec.Rvent, spec.V) == (1.3, 4.0, 50.0)
