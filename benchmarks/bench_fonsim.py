@@ -3,7 +3,10 @@
 * fill (N = 1): a 50 mL container filled from atmosphere to 3 bar absolute through an
   orifice (FONSim ``FlowRestrictor``, d = 0.5 mm, K = 0.6; pneunet's quadrature resistor
   with R = 4/(πd²)·√(K·p_atm/ρ_stp), the same law), 2 s;
-* chain: N such restrictor–container cells in series fed by that step, 2 s.
+* chain: N such restrictor–container cells in series fed by that step, 2 s;
+* oscillator: the paper's relaxation oscillator (axi valve) with a 1 mL dead volume at
+  the valve output, 20 s; in FONSim the membrane valve is a user-written component
+  evaluating pneunet's law; the period against pneunet at rtol 1e-9.
 
 Both use FONSim's gas (ρ_stp = 1.23 kg/m³ at 1.013 bar): pneunet's temperature is set so
 that M/(R·T) = ρ_stp/p_atm, and its flow band is 1e-3 kPa² (FONSim's law has none).
@@ -12,7 +15,7 @@ rtol = atol = 1e-10 on a 10 ms grid, in kPa (no reference above N = 1000).  FONS
 ``step=(1e-4, 1e-2)``; it is skipped with a note when it is not installed
 (``pip install fonsim``).  Wall times of the simulation only (build excluded), s.
 
-Run:  python benchmarks/bench_fonsim.py [--sizes 1,10,30,100,300] [--fonsim-max 100]
+Run:  python benchmarks/bench_fonsim.py [--sizes 1,10,30,100,1000,10000] [--fonsim-max 30]
 """
 from __future__ import annotations
 
@@ -31,9 +34,9 @@ GRID = np.arange(0.0, 2.0 + 1e-9, 0.01)
 
 def pneunet_chain(n, t_stop=2.0, rtol=1e-5):
     """pneunet: (every container's pressure on GRID (n_t, n) in kPa, seconds)."""
-    from pneunet import AIR, Circuit
+    from pneunet import Circuit
 
-    temperature = AIR.molar_mass_g_mol * 1e-3 * P_ATM / (R_GAS * RHO_STP)
+    temperature = _matched_temperature()
     r = 4 / (math.pi * D ** 2) * math.sqrt(K_FACTOR * P_ATM / RHO_STP) * 1e-9  # kPa·s/mg
     c = Circuit(f"chain {n}", ambient=P_ATM / 1e3, temperature=temperature, flow_band=1e-3,
                 rtol=rtol, atol=rtol)
@@ -74,10 +77,99 @@ def fonsim_chain(n, t_stop=2.0):
                             for k in range(1, n + 1)]), seconds
 
 
+def _matched_temperature():
+    from pneunet import AIR
+
+    return AIR.molar_mass_g_mol * 1e-3 * P_ATM / (R_GAS * RHO_STP)
+
+
+def pneunet_oscillator(t_stop, rtol=1e-5):
+    """The paper's oscillator (axi valve, R_out = 2·R_f, 200 mL tank, 1 mL at the valve
+    output) venting to FONSim's atmosphere: (Oscillation of the tank pressure, seconds)."""
+    from pneunet.analysis.oscillation import analyze_oscillation
+    from pneunet.paper_circuits import oscillator
+
+    c = oscillator(p_low=P_ATM / 1e3, V_out=1.0, temperature=_matched_temperature(),
+                   rtol=rtol, atol=rtol)
+    start = time.perf_counter()
+    sol = c.tran(t_stop)
+    seconds = time.perf_counter() - start
+    return analyze_oscillation(sol.t, sol.pressure("tank")), seconds
+
+
+def fonsim_oscillator(t_stop):
+    """The same oscillator in FONSim with a user-written membrane valve component (the
+    law and partials of :mod:`pneunet.laws`): (Oscillation, seconds), or None."""
+    try:
+        import fonsim as fons
+        from fonsim.components.terminals import terminal_fluidic
+        from fonsim.core.component import Component
+        from fonsim.core.terminal import Terminal
+    except ImportError:
+        return None
+    from pneunet.analysis.oscillation import analyze_oscillation
+    from pneunet.laws import valve_flow_and_partials
+    from pneunet.valve_params import PAPER_VALVES
+
+    axi = PAPER_VALVES["axi"].as_dict()
+
+    class MembraneValve(Component):
+        """Terminals a (in), b (out), c (control, no flow); SI units."""
+
+        def __init__(self, label):
+            super().__init__(label)
+            self.set_terminals(*(Terminal(x, terminal_fluidic, {"pressure": f"p{i}",
+                                                               "massflow": f"mf{i}"})
+                                 for i, x in enumerate("abc")))
+
+            @self.auto
+            def evaluate(p0, p1, p2, mf0, mf1, mf2):
+                law, grad = valve_flow_and_partials(p0 / 1e3, p1 / 1e3, p2 / 1e3, **axi)
+                jacobian = [{"mf0": 1.0, **{f"p{i}": -float(g) * 1e-9 for i, g in
+                                            enumerate(grad)}},
+                            {"mf0": 1.0, "mf1": 1.0}, {"mf2": 1.0}]
+                return np.array([mf0 - float(law) * 1e-6, mf0 + mf1, mf2]), jacobian
+            self.evaluate = evaluate
+
+    def restrictor(label, r, d=1e-3):  # K-factor of a quadrature resistance r (kPa·s/mg)
+        k = (r * 1e9 * math.pi * d ** 2 / 4) ** 2 * RHO_STP / P_ATM
+        return fons.FlowRestrictor(label, fluid=fons.air, diameter=d, k=k)
+
+    system = fons.System("oscillator")
+    system.add(fons.PressureSource("supply", pressure=496e3), MembraneValve("X1"),
+               restrictor("Rout", 2 * axi["Rf"]), restrictor("Rvent", 3.0),
+               fons.Container("Vout", fluid=fons.air, volume=1e-6),
+               fons.Container("tank", fluid=fons.air, volume=200e-6),
+               fons.PressureSource("low", pressure=P_ATM))
+    system.connect("supply", "X1")
+    system.connect_common("X1", "Vout", "Rout")
+    system.connect_common("Rout", "tank", "Rvent", "X1")
+    system.connect("Rvent", "low")
+    with contextlib.redirect_stdout(io.StringIO()):
+        sim = fons.Simulation(system, duration=t_stop, step=(1e-5, 1e-2))
+        start = time.perf_counter()
+        sim.run()
+        seconds = time.perf_counter() - start
+    return analyze_oscillation(sim.times, system.get("tank").get("pressure") / 1e3), seconds
+
+
+def oscillator_table(have_fonsim, t_stop=20.0):
+    reference, _ = pneunet_oscillator(t_stop, rtol=1e-9)
+    print(f"\noscillator, {t_stop:g} s (reference period {reference.period_s:.4f} s, "
+          "pneunet rtol 1e-9)")
+    print("| simulator | s | period s | period error |")
+    print("|---|---|---|---|")
+    runs = [("pneunet", pneunet_oscillator(t_stop))]
+    runs += [("FONSim", fonsim_oscillator(t_stop))] if have_fonsim else []
+    for name, (osc, seconds) in runs:
+        print(f"| {name} | {seconds:.2f} | {osc.period_s:.4f} | "
+              f"{abs(osc.period_s / reference.period_s - 1):.1e} |")
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sizes", default="1,10,30,100,300,1000,10000")
-    parser.add_argument("--fonsim-max", type=int, default=100,
+    parser.add_argument("--fonsim-max", type=int, default=30,
                         help="largest N given to FONSim (its time grows fast with N)")
     args = parser.parse_args(argv)
     try:
@@ -97,6 +189,7 @@ def main(argv=None):
         cells = [f"{ours_s:.2f}", err(ours)]
         cells += [f"{theirs[1]:.2f}", err(theirs[0])] if theirs else ["—", "—"]
         print(f"| {n} | " + " | ".join(cells) + " |", flush=True)
+    oscillator_table(have_fonsim)
 
 
 if __name__ == "__main__":
