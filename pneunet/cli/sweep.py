@@ -128,31 +128,20 @@ def main(args) -> int:
             check_writable(path, what, "choose a writable file with --out / --plot")
     if args.fresh and store.exists():
         store.unlink()
-    executor, cluster = None, None
-    if args.dask:
-        from distributed import Client, LocalCluster
+    from .executors import dask_or_local
 
-        if args.dask == "local":
-            cluster = LocalCluster(n_workers=args.workers or 2, threads_per_worker=1,
-                                   dashboard_address=None)
-            executor = Client(cluster)
-        else:
-            executor = Client(args.dask)
     progress = not (args.no_progress or args.json or args.quiet)
     try:
-        result = S.run_sweep(build, points, analysis, executor=executor, workers=args.workers,
-                             store=store, progress=progress, retry_failed=args.retry_failed)
+        with dask_or_local(args.dask, args.workers) as executor:
+            result = S.run_sweep(build, points, analysis, executor=executor,
+                                 workers=args.workers, store=store, progress=progress,
+                                 retry_failed=args.retry_failed)
     except KeyboardInterrupt:
         kept = len(set(S.read_store(store)) & {S.point_key(p) for p in points})
         print(f"sweep interrupted: {kept} of {len(points)} points are finished and kept in "
               f"{store}; rerun the same command to compute the other {len(points) - kept}",
               file=sys.stderr)
         return 130
-    finally:
-        if executor is not None:
-            executor.close()
-        if cluster is not None:
-            cluster.close()
     result.to_csv(out)
     summary = {"points": len(points), "computed": result.computed, "reused": result.reused,
                "failed": result.failed, "with_solver_messages": result.with_solver_messages,
