@@ -270,7 +270,11 @@ class Function(Waveform):
         return f"Function({getattr(self.function, '__name__', self.function)!r})"
 
     def _one(self, t):
-        value = self.function(float(t))
+        try:
+            value = self.function(float(t))
+        except Exception as err:  # noqa: BLE001 - any error of the user's function
+            raise ParameterError(f"function source {self!r} raised {type(err).__name__} at "
+                                 f"t={t:g} s: {err}") from err
         try:
             value = float(value)
         except (TypeError, ValueError):

@@ -48,6 +48,8 @@ def test_function_flow_source_and_bad_functions():
                                run(Sine(50.0, 20.0, 3.0)), rtol=1e-5)
     with pytest.raises(ParameterError, match="returned nan at t="):
         run(lambda t: float("nan"))
+    with pytest.raises(ParameterError, match="raised ZeroDivisionError at t="):
+        run(lambda t: 50.0 if t < 0.5 else 1 / 0)
     c = Circuit()
     c.pressure_source("P1", "a", lambda t: 200.0)
     from pneunet.netlist import print_circuit
