@@ -65,6 +65,13 @@ class Accumulator(_ElasticVolume):
         pref = self.column("pref")
         self._pref = np.where(np.isnan(pref), context.options.ambient, pref)
         self._v0, self._k = self.column("V0"), self.column("k")
+        p0 = self.column("p0")
+        start = np.where(np.isnan(p0), context.options.ambient, p0)
+        for spec, p, v in zip(specs, start, self.volume(start)[0]):
+            if v <= 0:
+                raise ParameterError(f"the volume V0 + k·(p − pref) is {v:g} mL at the initial "
+                                     f"pressure {p:g} kPa", where=spec.where,
+                                     hint="it must be > 0: raise V0, or lower k or pref")
 
     def volume(self, p):
         return self._v0 + self._k * (p - self._pref), self._k + 0.0 * p, 0.0 * p
