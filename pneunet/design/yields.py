@@ -62,12 +62,25 @@ class YieldResult(Summarized):
                 ("wall time", f"{self.wall_time_s:.3g} s")]
         return "", rows, ".samples, .sensitivities, .plot_tornado(path), .to_json()"
 
+    @property
+    def limiting_parameter(self):
+        """(parameter, metric): the most important parameter of the target that fails
+        most often (None when every sample passes every target or none was measured)."""
+        failing = {k: v for k, v in self.per_target.items() if v < 1 and k in self.most_important}
+        if not failing:
+            return None
+        metric = min(failing, key=failing.get)
+        return self.most_important[metric], metric
+
     def to_json(self) -> dict:
         table = self.sensitivities.astype(object).where(self.sensitivities.notna(), None)
         return {"yield": self.yield_, "se": self.se, "interval95": list(self.interval),
                 "passed": self.passed, "n": self.n, "seed": self.seed,
                 "failed_simulations": self.failed_simulations, "per_target": self.per_target,
-                "most_important": self.most_important, "spread": self.spread,
+                "most_important": self.most_important,
+                "limiting_parameter": self.limiting_parameter and
+                dict(zip(("parameter", "metric"), self.limiting_parameter)),
+                "spread": self.spread,
                 "sensitivities": table.to_dict(orient="records"), "notes": self.notes,
                 "simulations": self.simulations, "wall_time_s": round(self.wall_time_s, 3)}
 
@@ -93,6 +106,10 @@ class YieldResult(Summarized):
             lines.append(f"  {row.metric:<{wm}}  {row.parameter:<{wp}}  SD {row.sd:<9.4g} "
                          f"effect {effect}")
         lines += [f"  most important for {k}: {v}" for k, v in self.most_important.items()]
+        if self.limiting_parameter:
+            name, metric = self.limiting_parameter
+            lines.append(f"the yield is limited most by the spread of {name} (through "
+                         f"{metric}, the target missed most often)")
         lines += [f"note: {n}" for n in self.notes]
         return "\n".join(lines)
 

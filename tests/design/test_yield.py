@@ -46,6 +46,7 @@ def test_yield_equals_brute_force_of_the_same_samples(short_oscillator, tmp_path
     lo, hi = out["interval95"]
     assert lo < p < hi
     assert out["most_important"] == {"period": "X1.pclose"}
+    assert out["limiting_parameter"] == {"parameter": "X1.pclose", "metric": "period"}
     # p_close's effect of one SD (10/√12 kPa): the derivative by brute force, and the
     # regression on the samples agree with it (the period is near-linear in p_close)
     sd = 10 / math.sqrt(12)
