@@ -56,6 +56,7 @@ class Spread:
         raise KeyError(name)
 
     def sample(self, n: int, seed: int = 0) -> list[dict]:
+        """``n`` points {name: value}, the same for the same ``seed``."""
         points = S.monte_carlo(self.independent, n, seed) if self.independent else \
             [{} for _ in range(n)]
         for i, (names, mean, cov) in enumerate(self.groups, start=1):
@@ -65,8 +66,9 @@ class Spread:
         return points
 
     def describe(self) -> dict:
-        out = {k: {"distribution": type(d).__name__.lower(), "sd": self.sd(k)}
-               for k, d in self.independent.items()}
+        """{name: distribution, mean, sd} for reports."""
+        out = {k: {"distribution": type(d).__name__.lower(), "mean": self.centre(k),
+                   "sd": self.sd(k)} for k, d in self.independent.items()}
         for names, mean, _ in self.groups:
             out.update({k: {"distribution": "normal (fitted covariance)", "mean": m,
                             "sd": self.sd(k)} for k, m in zip(names, mean)})
