@@ -21,6 +21,7 @@ from .includes import KEYWORDS as INCLUDE_KEYWORDS
 from .located import did_you_mean as _close, error_at as _err
 from .measures import MeasureStatements
 from .models import ModelCards
+from .size import check_size
 from .structure import Source
 from .syntax import Call, Pair, Str, Word
 from .values import (SCALE, check_number, convert, dimension_of, number_in_expression,
@@ -83,6 +84,7 @@ class _Builder(ModelCards, AnalysisStatements, MeasureStatements):
                 if st.keyword == ".model":
                     self._model(st, self.scope)
         self.circuit = Circuit(self.source.title, options=self.options)
+        check_size(self.source, self.kind_words, self.limits)
         self._body(top, self.scope, "", {}, [])
         if not self.circuit.elements:
             last = self.source.top[-1].span if self.source.top else \

@@ -73,8 +73,12 @@ def test_limits_are_changed_through_the_api_and_the_cli(tmp_path, capsys):
     assert len(parse_netlist(text).circuit.elements) == 13
     with pytest.raises(NetlistError, match=r"makes 10 copies \(limit max_array_size = 5\)"):
         parse_netlist(text, limits={"max_array_size": 5})
+    with pytest.raises(NetlistError, match=r"this line makes 10 elements, 13 with the lines "
+                                           r"before \(limit max_elements = 4\)"):
+        parse_netlist(text, limits={"max_elements": 4})  # counted before any is made
+    braced = BASE + ".param n=9\nR[0:{n}] a atm 1\n"  # counted as it is made
     with pytest.raises(NetlistError, match=r"more than 4 elements \(limit max_elements = 4\)"):
-        parse_netlist(text, limits={"max_elements": 4})
+        parse_netlist(braced, limits={"max_elements": 4})
     deep = BASE + ".param x={" + "-" * 300 + "1}\n"
     assert parse_netlist(deep, limits={"max_expression_depth": 400}).params["x"] == 1
     path = tmp_path / "a.pn"
@@ -140,3 +144,17 @@ def test_an_error_about_the_whole_circuit_names_the_file(tmp_path, capsys):
     path.write_text("R1 a b 1\nV1 a 10mL\n")
     assert main(["check", str(path)]) == 2
     assert capsys.readouterr().err.startswith(f"{path}: error: no node has a defined pressure")
+
+
+def test_a_nest_of_subcircuit_arrays_is_counted_before_it_is_made(tmp_path):
+    """Six levels of ten copies: 10^6 elements asked for, refused at once at the instance."""
+    levels = [".subckt L0 n\nR1 n atm 1\n.ends"]
+    levels += [f".subckt L{i} n\nX[1:10] n L{i - 1}\n.ends" for i in range(1, 7)]
+    text = "P1 a 200kPa\n" + "\n".join(levels) + "\nXtop a L6\n"
+    start = time.perf_counter()
+    with pytest.raises(NetlistError) as info:
+        parse_netlist(text)
+    assert time.perf_counter() - start < 2
+    assert info.value.span.line == text.count("\n")
+    assert "this line makes 1000000 elements, 1000001 with the lines before (limit " \
+           "max_elements = 100000)" in info.value.message
