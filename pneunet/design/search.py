@@ -72,7 +72,8 @@ class DesignResult(Summarized):
                                   "cannot meet the targets: the closest design")]
         lines += [f"  {k} = {v:.6g}" for k, v in self.values.items()]
         for t in self.targets:
-            ok = "ok" if t["met"] else f"misses by {t['miss']:.4g} {t['unit']}".rstrip()
+            ok = "ok" if t["met"] else "not measured (no oscillation?)" if \
+                math.isnan(t["miss"]) else f"misses by {t['miss']:.4g} {t['unit']}".rstrip()
             lines.append(f"  {t['target']:<24} achieved {_fmt(t['achieved'])} {t['unit']}"
                          f"  {ok}")
         for d in self.limiting:
