@@ -39,14 +39,17 @@ RESTARTS = 2
 
 
 def least_squares_log(fun, x0, lb, ub, *, max_nfev: int = 40, diff_step: float = 1e-3,
-                      pool=None, xtol: float = 1e-5, ftol: float = 1e-6) -> LsqResult:
+                      pool=None, xtol: float = 1e-4, ftol: float = 1e-6) -> LsqResult:
     """Levenberg–Marquardt on ``fun(x)`` (x: ln-parameters in [lb, ub]) with forward
     differences of step ``diff_step`` (backwards at an upper bound).
 
     LM knows no bounds: a step past one is clipped, and LM starts again (at most
     :data:`RESTARTS` times) with that parameter held at its bound and the others free.
     ``max_nfev`` caps the simulations, Jacobian columns included; no point is simulated
-    twice.  The Jacobian returned has a column for every parameter."""
+    twice.  The Jacobian returned has a column for every parameter.  LM stops when a
+    step changes ln x by less than ``xtol``·‖ln x‖ (1e-4: ~0.05 % of a parameter, far
+    inside any interval a recording gives: 1e-5 cost the 3-parameter oscillator fit a
+    quarter more simulations and moved no estimate by 0.01 standard errors)."""
     from scipy import optimize
 
     lb, ub = np.asarray(lb, float), np.asarray(ub, float)
