@@ -101,8 +101,21 @@ def traces():
     plot_waterfall(diag, OUT / "trace_waterfall.png")
 
 
+def tornado():
+    """``pneunet design … --yield N --tornado PNG`` / ``YieldResult.plot_tornado``: which
+    spread moves each specification most (a 40-sample yield, p_close and R_vent spread)."""
+    from pneunet.design import Problem, from_tolerances, yield_analysis
+
+    problem = Problem(str(ROOT / "netlists" / "oscillator_design.pn"),
+                      ["period=3s±0.3s", "swing>=130kPa"], workers=1)
+    with problem:
+        values = {"Rout": 1.2302, "Rvent": 2.359, "V": 114.67}
+        spread = from_tolerances(problem, values, ["X1.pclose=±5kPa", "Rvent=±5%"])
+        yield_analysis(problem, values, spread, n=40, seed=0).plot_tornado(OUT / "tornado.png")
+
+
 FIGURES = {f.__name__: f for f in (solution, sweep, branches, design, identify, diagnose,
-                                   traces)}
+                                   traces, tornado)}
 
 if __name__ == "__main__":
     OUT.mkdir(parents=True, exist_ok=True)
