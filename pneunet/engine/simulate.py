@@ -82,10 +82,12 @@ def operating_point(circuit, *, t: float = 0.0, stability: bool = True) -> Opera
 
 @captured
 def transient(circuit, t_stop: float, *, t_step: float | None = None, t_start: float = 0.0,
-              start: str = "ic", backend: str | None = None, progress: bool = False) -> Solution:
+              start: str = "ic", backend: str | None = None, progress: bool = False,
+              max_output_points: float | None = None) -> Solution:
     """Simulate from ``t_start`` to ``t_stop`` (s).
 
-    t_step   output interval (s); None stores every internal step of IDA
+    t_step   output interval (s); None stores every internal step of IDA;
+             at most ``max_output_points`` outputs (default :data:`MAX_OUTPUT_POINTS`)
     start    'ic': volumes start at their .ic / p0 / ambient pressure;
              'op': from the operating point at ``t_start``
     backend  'sksundae' (default) or 'odes' (scikits.odes, when installed)
@@ -102,12 +104,13 @@ def transient(circuit, t_stop: float, *, t_step: float | None = None, t_start: f
         raise SolverError(f"t_stop ({t_stop} s) must be after t_start ({t_start} s)")
     if t_step is not None and not 0 < t_step <= t_stop - t_start:
         raise SolverError(f"t_step must lie in (0, {t_stop - t_start}] s, got {t_step}")
-    if t_step is not None and (t_stop - t_start) / t_step > MAX_OUTPUT_POINTS:
+    limit = MAX_OUTPUT_POINTS if max_output_points is None else max_output_points
+    if t_step is not None and (t_stop - t_start) / t_step > limit:
         raise ParameterError(f"t_step {t_step:g} s over {t_stop - t_start:g} s asks for "
                              f"{(t_stop - t_start) / t_step:.3g} output points (limit "
-                             f"MAX_OUTPUT_POINTS = {MAX_OUTPUT_POINTS:.0e})",
+                             f"max_output_points = {limit:.0e})",
                              hint="a larger output step: the integrator's own steps do "
-                                  "not depend on it")
+                                  "not depend on it; or a larger max_output_points")
     wall = _time.perf_counter()
     dae = CircuitDAE(circuit)
     opts = circuit.options
@@ -119,6 +122,8 @@ def transient(circuit, t_stop: float, *, t_step: float | None = None, t_start: f
     else:
         raise SolverError(f"start must be 'ic' or 'op', got {start!r}")
     y, yp = consistent_state(dae, t_start, y0)
+    if dae.n == 0:  # every node held by a source: nothing to integrate
+        return _sources_only(dae, t_start, t_stop, t_step, wall)
 
     backends = available_backends()
     name = backend or "sksundae"
@@ -212,6 +217,19 @@ def transient(circuit, t_stop: float, *, t_step: float | None = None, t_start: f
 #: output points a transient may ask for (8 bytes per point and unknown)
 MAX_OUTPUT_POINTS = 10_000_000
 STEP_STORE_LIMIT = 512  # unknowns up to which internal steps are stored and interpolated
+
+
+def _sources_only(dae, t_start, t_stop, t_step, wall) -> Solution:
+    """The solution of a circuit without unknowns: the sources' pressures and the flows
+    they drive, on the output grid (or at the sources' corners), no integrator."""
+    corners = np.concatenate([[t_start, t_stop], dae.breakpoints(t_start, t_stop),
+                              dae.jumps(t_start, t_stop)])
+    times = (np.append(np.arange(t_start, t_stop, t_step), t_stop) if t_step
+             else np.unique(corners))
+    stats = dict(backend="none (no unknowns)", steps=0, output_points=len(times),
+                 branch_jumps=0, unknowns=0, algebraic=0,
+                 wall_time_s=_time.perf_counter() - wall)
+    return _build_solution(dae, times, np.empty((len(times), 0)), stats, ())
 
 
 class _Record:

@@ -128,3 +128,23 @@ def test_mass_is_conserved_over_a_transient(oscillator_run):
     net = (s.flow("Rout") - s.flow("Rvent"))[keep]
     stored = AIR.capacitance(200.0) * (s.pressure("tank")[-1] - s.pressure("tank")[0])
     assert np.trapezoid(net, t) == pytest.approx(stored, rel=2e-3)
+
+
+def test_a_circuit_without_unknowns_is_its_sources():
+    """Every node held by a source (a volume on a source's node included): no integrator
+    (scikit-sundae cannot make a solver of size 0: it was a traceback), the pressures are
+    the sources' and the flows the quadrature law's, at every output time."""
+    import numpy as np
+
+    from pneunet import Circuit
+    from pneunet.waveforms import Step
+
+    c = Circuit("sources only", ambient=100.0)
+    c.pressure_source("P1", "a", Step(200.0, 300.0, at=0.5))
+    c.resistor("R1", "a", "atm", R=2.0)
+    c.volume("V1", "a", V=10.0)
+    sol = c.tran(1.0, t_step=0.1)
+    assert sol.stats["unknowns"] == 0 and len(sol.t) == 11
+    p = np.where(sol.t < 0.5, 200.0, 300.0)
+    np.testing.assert_allclose(sol.pressure("a"), p)
+    np.testing.assert_allclose(sol.flow("R1"), np.sqrt(p ** 2 - 100.0 ** 2) / 2.0, rtol=1e-3)

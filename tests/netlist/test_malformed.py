@@ -118,3 +118,25 @@ def test_output_file_in_the_way_and_absurd_output_grid_exit_2(capsys, tmp_path):
     assert main(["run", str(net), "-o", str(tmp_path / "out"), "-q", "--limit",
                  "max_output_points=1e11", "--limit", "max_elemnts=5"]) == 2
     assert "unknown limit 'max_elemnts'" in capsys.readouterr().err
+
+
+def test_max_output_points_raised_by_limit_reaches_the_engine(capsys, tmp_path):
+    """``--limit max_output_points`` governs the run, not only the parse: a limit below
+    the default refuses a grid the default allows, and a .tran over the engine's default
+    runs once the limit is raised (checked on the API: the engine takes the deck's word)."""
+    from pneunet import Circuit
+    from pneunet.errors import PneunetError
+
+    net = tmp_path / "n.pn"
+    net.write_text("P1 a 200kPa\nR1 a atm 1\nV1 a 10mL\n.tran 10ms 1s\n")
+    assert main(["run", str(net), "-o", str(tmp_path / "o1"), "-q", "--limit",
+                 "max_output_points=50"]) == 2
+    assert "max_output_points = 50" in capsys.readouterr().err
+    assert main(["run", str(net), "-o", str(tmp_path / "o2"), "-q"]) == 0
+    c = Circuit("c")
+    c.pressure_source("P1", "a", 200.0)
+    c.resistor("R1", "a", "atm", R=1.0)
+    c.volume("V1", "a", V=10.0)
+    with pytest.raises(PneunetError, match="max_output_points = 5e\\+01"):
+        c.tran(1.0, t_step=0.01, max_output_points=50)
+    assert len(c.tran(1.0, t_step=0.01, max_output_points=200).t) == 101
