@@ -27,7 +27,7 @@ def _load_builtins() -> None:
         return
     _LOADED = True
     from . import (check_valves, elastic, liquid, resistors, sources, thermal,  # noqa: F401
-                   valves, volumes)
+                   tubes, valves, volumes)
     from importlib.metadata import entry_points
 
     for ep in entry_points(group="pneunet.elements"):

@@ -119,6 +119,12 @@ class ElementFamily:
     def check_spec(cls, spec: ElementSpec) -> None:
         """Checks across parameters (single values are checked by :class:`Param`)."""
 
+    @classmethod
+    def expand(cls, spec: ElementSpec) -> list[ElementSpec]:
+        """The elements the circuit stores for ``spec``: itself, or parts joined at
+        internal nodes (a ``tube``'s segments)."""
+        return [spec]
+
     def column(self, name: str) -> np.ndarray:
         """All instances' values of a numeric parameter, as an array."""
         return np.array([s.params[name] for s in self.specs], dtype=float)

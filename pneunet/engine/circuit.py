@@ -73,7 +73,12 @@ class Circuit:
         values = self._convert_params(family, params, where)
         spec = ElementSpec(family.kind, name, nodes, values, span)
         family.check_spec(spec)
-        self.elements[name] = spec
+        parts = family.expand(spec)
+        taken = [p.name for p in parts if p.name != name and p.name in self.elements]
+        if taken:
+            raise TopologyError(f"{name}'s part {taken[0]!r} takes the name of an element",
+                                where=where, hint=f"first defined at {self.elements[taken[0]].span}")
+        self.elements.update((part.name, part) for part in parts)
         return spec
 
     def _convert_params(self, family, params, where) -> dict[str, Any]:
@@ -142,6 +147,13 @@ class Circuit:
     def pipe(self, name, a, b, length, diameter, f=None, **kw):
         """Tube resistor from length and diameter (mm) and Fanning friction factor."""
         return self.add("pipe", name, (a, b), length=length, diameter=diameter, f=f, **kw)
+
+    def tube(self, name, a, b, length, diameter, segments=None, f=None, **kw):
+        """Gas line with its own volume: ``length`` and inner ``diameter`` (mm) in
+        ``segments`` lumped segments (default from L/D); Fanning ``f`` (default: laminar
+        below turbulent Blasius flow)."""
+        return self.add("tube", name, (a, b), length=length, diameter=diameter,
+                        segments=segments, f=f, **kw)
 
     def volume(self, name, node, V, n=None, p0=None, **kw):
         """Rigid volume ``V`` (mL), polytropic exponent ``n``, initial pressure ``p0``."""

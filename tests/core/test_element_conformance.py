@@ -165,13 +165,24 @@ def _laminar_tube():
                                  diameter=1.0)
 
 
+def _tube():
+    c = Circuit("tube", ambient=100.0)
+    c.pressure_source("P1", "a", 400.0)
+    c.tube("T1", "a", "m", length=500.0, diameter=2.0, segments=3, f=0.008)
+    c.tube("T2", "m", "atm", length=500.0, diameter=2.0, segments=3, f=0.008)
+    c.tube("T3", "a", "d", length=2000.0, diameter=1.0, segments=2)  # laminar/Blasius, dead end
+    # equal halves in quadrature (eq. 5); the dead end at the source pressure
+    return c, {"m": np.sqrt((400.0 ** 2 + 100.0 ** 2) / 2), "d": 400.0, "T3.1": 400.0}, dict(
+        kind="tube", nodes=("a", "b"), length=10.0, diameter=2.0, segments=1.5)
+
+
 CASES = {"pressure_source": _pressure_source, "flow_source": _flow_source,
          "resistor": _resistor, "pipe": _pipe, "volume": _volume, "actuator": _actuator,
          "valve": _valve, "thermal_volume": _thermal_volume,
          "thermal_chamber": _thermal_chamber, "thermal_inlet": _thermal_chamber,
          "check_valve": _check_valve, "accumulator": _accumulator, "pv_volume": _pv_volume,
          "orifice": _orifice, "laminar_tube": _laminar_tube,
-         "hysteretic_check_valve": _hysteretic_check_valve}
+         "hysteretic_check_valve": _hysteretic_check_valve, "tube": _tube}
 
 
 def test_every_registered_family_has_a_conformance_case():
