@@ -48,10 +48,11 @@ class CircuitDAE:
             fam = elements.family(spec.kind)
             pinned_by.update({spec.nodes[p]: spec.name for p in fam.pinned_ports})
             storage_nodes.update(spec.nodes[p] for p in fam.storage_ports)
-        references = [n for n in circuit.nodes if circuit.is_reference(n)]
+        nodes = circuit.nodes
+        references = [n for n in nodes if circuit.is_reference(n)]
         fixed = set(pinned_by) | set(references)
-        self.node_names = [n for n in circuit.nodes if n not in fixed]
-        self.fixed_names = [n for n in circuit.nodes if n in fixed]
+        self.node_names = [n for n in nodes if n not in fixed]
+        self.fixed_names = [n for n in nodes if n in fixed]
         if self.options.dead_volume > 0:
             specs += [ElementSpec("volume", f"_dead_{n}", (n,),
                                   {"V": self.options.dead_volume, "n": 1.0, "p0": np.nan})

@@ -22,7 +22,8 @@ def check_topology(circuit) -> None:
 
     if not circuit.elements:
         raise TopologyError("the circuit has no elements")
-    pinned: dict[str, str] = {n: "reference" for n in circuit.nodes if circuit.is_reference(n)}
+    nodes = circuit.nodes  # a property that walks every element: once here
+    pinned: dict[str, str] = {n: "reference" for n in nodes if circuit.is_reference(n)}
     storage: set[str] = set()
     flow_edges: list[tuple[str, str]] = []
     touched_by_flow: set[str] = set()
@@ -45,24 +46,25 @@ def check_topology(circuit) -> None:
     if not pinned:
         raise TopologyError("no node has a defined pressure",
                             hint="add a pressure source, or connect a vent to 'atm' (or '0')")
-    floating = [n for n in circuit.nodes
+    floating = [n for n in nodes
                 if n not in touched_by_flow and n not in pinned and n not in storage]
     if floating:
         users = [s.name for s in circuit.elements.values() if floating[0] in s.nodes]
         raise TopologyError(
             f"node {floating[0]!r} is floating: it only connects to control ports ({', '.join(users)})",
             where=f"node {floating[0]}", hint="connect it to a source, a volume or a resistor")
-    for group in _components([n for n in circuit.nodes if n in touched_by_flow], flow_edges):
-        if not (group & set(pinned)) and not (group & storage):
+    for group in _components([n for n in nodes if n in touched_by_flow], flow_edges):
+        if pinned.keys().isdisjoint(group) and storage.isdisjoint(group):
             names = ", ".join(sorted(group))
             raise TopologyError(f"nodes {names} have no path to a defined pressure and no volume",
                                 where=f"node {sorted(group)[0]}",
                                 hint="connect them to a source or reference node, or add a volume")
-    unknown = [n for n in circuit.initial if n not in circuit.nodes]
+    known = set(nodes)
+    unknown = [n for n in circuit.initial if n not in known]
     if unknown:
         import difflib
 
-        close = difflib.get_close_matches(unknown[0], circuit.nodes, n=1)
+        close = difflib.get_close_matches(unknown[0], nodes, n=1)
         raise TopologyError(f"initial condition for unknown node {unknown[0]!r}",
                             where=f"node {unknown[0]}",
                             hint=f"did you mean {close[0]!r}?" if close else None)

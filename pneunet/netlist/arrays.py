@@ -18,6 +18,8 @@ _ANY_RANGE = re.compile(r"\[[^\[\]]*:[^\[\]]*\]")
 def split_range(text: str, item, limits):
     """``(base, indices)`` for ``text`` (``item``'s text after ``{}`` substitution) ending in a
     range; None for a plain name.  Errors point at the range's ``[`` in ``item``."""
+    if "[" not in text:
+        return None
     m = _TAIL.search(text)
     if not m or ":" not in m.group(1):
         if _ANY_RANGE.search(text):

@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 import re
 
+from .. import elements
 from ..errors import NetlistError, PneunetError, SourceSpan
 from .analyses import AnalysisStatements
 from .arrays import split_range
@@ -59,6 +60,7 @@ class _Builder(ModelCards, AnalysisStatements, MeasureStatements):
         self.overrides = dict(overrides)
         self.models: dict[str, object] = {}
         self.model_spans: dict[str, SourceSpan] = {}
+        self.converted: dict[tuple[str, str], float] = {}  # (literal, slot) -> value
 
     # ---- top level
     def build(self) -> Deck:
@@ -207,6 +209,9 @@ class _Builder(ModelCards, AnalysisStatements, MeasureStatements):
 
     def _subst(self, word: Word, scope) -> str:
         """Replace each {expr} inside a word by its value."""
+        if "{" not in word.text:
+            return word.text
+
         def repl(m):
             column = word.span.column + m.start() + 1
             value = evaluate(m.group(0)[1:-1], scope, word.span, column, self.limits)
@@ -222,6 +227,8 @@ class _Builder(ModelCards, AnalysisStatements, MeasureStatements):
             return evaluate(text[1:-1], scope, word.span, word.span.column + 1,
                             limits=self.limits)
         text = self._subst(word, scope)
+        if options is None and (text, slot) in self.converted:  # an array repeats its literals
+            return self.converted[text, slot]
         if split(text) is None:
             value = scope.lookup(text)
             if value is None:
@@ -233,9 +240,11 @@ class _Builder(ModelCards, AnalysisStatements, MeasureStatements):
                            _close(text, scope.names()) or
                            "write a number with its unit, e.g. " + _example(slot))
             return value
-        value = convert(text, slot, word.span, name=name, ambient=opts.ambient,
-                        gas=opts.gas_model)
-        return check_number(value, text, word.span, name)
+        value = check_number(convert(text, slot, word.span, name=name, ambient=opts.ambient,
+                                     gas=opts.gas_model), text, word.span, name)
+        if options is None:
+            self.converted[text, slot] = value
+        return value
 
     # ---- models
     def _fail_value(self, arg):
@@ -259,8 +268,6 @@ class _Builder(ModelCards, AnalysisStatements, MeasureStatements):
         return prefix + text
 
     def _element(self, st, scope, prefix, nodemap, stack):
-        from .. import elements
-
         head = st.items[0]
         if not isinstance(head, Word):
             raise _err(f"a line must start with an element name or a directive, got {head}", head)
@@ -299,8 +306,6 @@ class _Builder(ModelCards, AnalysisStatements, MeasureStatements):
 
     def _one_element(self, st, head, name_item, name, family, rest, scope, prefix, nodemap,
                      stack, idx, indices):
-        from .. import elements
-
         positional = [it for it in rest if not isinstance(it, Pair)]
         pairs = [it for it in rest if isinstance(it, Pair)]
         # subcircuit instance: X... whose last positional word names a subcircuit
@@ -563,8 +568,6 @@ class _Builder(ModelCards, AnalysisStatements, MeasureStatements):
 
     # ---- analyses
 def _kind_keywords():
-    from .. import elements
-
     out = set()
     for k in elements.known_kinds():
         fam = elements.family(k)

@@ -13,6 +13,7 @@ Numbers may carry a SPICE scale suffix (``2k``, ``5m``) or a single-word unit
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 
 from ..errors import NetlistError, SourceSpan
@@ -70,13 +71,12 @@ def evaluate(text: str, scope: Scope, span: SourceSpan, column: int | None = Non
     from lark.exceptions import UnexpectedInput
 
     from .limits import DEFAULT
-    from .syntax import lark_parser
 
     base = span.column if column is None else column
     if not text.strip():
         raise NetlistError("empty expression {}", span=_shift(span, 1, base))
     try:
-        tree = lark_parser().parse(text, start="expr")
+        tree = _parse(text)
         value = _Evaluator(scope, span, base, limits or DEFAULT).eval(tree)
     except RecursionError:
         raise NetlistError("expression nested too deeply (more levels than Python's "
@@ -96,6 +96,15 @@ def evaluate(text: str, scope: Scope, span: SourceSpan, column: int | None = Non
                            span=_shift(span, 1, base), hint="check the exponents and the "
                            "parameter values it uses")
     return value
+
+
+@functools.lru_cache(maxsize=4096)
+def _parse(text: str):
+    """The parse tree of expression ``text`` (an array repeats its expressions per copy; the
+    trees are only read)."""
+    from .syntax import lark_parser
+
+    return lark_parser().parse(text, start="expr")
 
 
 class _Evaluator:
@@ -128,10 +137,16 @@ class _Evaluator:
 
     def token(self, tok):
         if tok.type == "NUMBER":
-            from .values import number_in_expression
+            from .values import number_in_expression, split
 
+            magnitude, suffix = split(tok)
+            if not suffix:  # a plain number: no span needed
+                return magnitude
             return number_in_expression(str(tok), _shift(self.span, tok.column, self.base))
         if tok.type == "NAME":
+            value = self.scope.lookup(tok)
+            if value is not None:
+                return value
             return self.name(str(tok), _shift(self.span, tok.column, self.base))
         raise AssertionError(tok.type)  # pragma: no cover
 
