@@ -38,7 +38,7 @@ def viscosity(gas_name: str, temperature_k):
 
 
 def default_segments(length_mm: float, diameter_mm: float) -> int:
-    """One segment per 100 diameters, at least 4 (slowest mode within ~2 %), at most 20."""
+    """One segment per 100 diameters, at least 4 (slowest mode of a closed line within 1.3 %), at most 20."""
     return int(min(MAX_SEGMENTS, max(4, np.ceil(length_mm / (DIAMETERS_PER_SEGMENT * diameter_mm)))))
 
 
