@@ -38,8 +38,10 @@ def viscosity(gas_name: str, temperature_k):
 
 
 def default_segments(length_mm: float, diameter_mm: float) -> int:
-    """One segment per 100 diameters, at least 4 (slowest mode of a closed line within 1.3 %), at most 20."""
-    return int(min(MAX_SEGMENTS, max(4, np.ceil(length_mm / (DIAMETERS_PER_SEGMENT * diameter_mm)))))
+    """One segment per 100 diameters, at least 4 (the slowest mode of a closed line then
+    within 1.3 %), at most 20."""
+    per_aspect = np.ceil(length_mm / (DIAMETERS_PER_SEGMENT * diameter_mm))
+    return int(min(MAX_SEGMENTS, max(4, per_aspect)))
 
 
 def laminar_turbulent_coefficients(length_mm, diameter_mm, temperature_k, molar_mass_g_mol, mu):
@@ -106,12 +108,13 @@ class Tube(ElementFamily):
         length, diameter, self._f = self.column("length"), self.column("diameter"), self.column("f")
         self._half_c = gas.capacitance(np.pi / 8 * diameter ** 2 * length * 1e-3, opts.temperature)
         self._explicit = ~np.isnan(self._f)
+        # eq. 6 where f is given (a placeholder f = 1 elsewhere: np.where drops it)
         self._r = pipe_resistance(length, diameter, np.where(self._explicit, self._f, 1.0),
                                   opts.temperature, gas.molar_mass_g_mol)
-        if gas.name not in SUTHERLAND:
+        if gas.name not in SUTHERLAND and not self._explicit.all():
             raise ParameterError(f"tube: no viscosity known for gas {gas.name!r}",
                                  where=specs[0].where, hint="give f= for eq. 6")
-        mu = viscosity(gas.name, opts.temperature)
+        mu = viscosity(gas.name, opts.temperature) if gas.name in SUTHERLAND else np.nan
         self._a, self._b = laminar_turbulent_coefficients(length, diameter, opts.temperature,
                                                           gas.molar_mass_g_mol, mu)
 
