@@ -11,8 +11,14 @@ def register(subparsers) -> None:
                     "parameter ranges, subcircuits, includes and the circuit's topology. "
                     "Exit code 0 if it is fine, 2 with file:line:column and a caret if not.")
     p.add_argument("netlist", metavar="FILE.pn", help="netlist file")
+    p.add_argument("--verbose", "-v", action="store_true",
+                   help=f"list every node and element (by default at most {LISTED} of each)")
     netlist_args.add(p)
     p.set_defaults(func=main)
+
+
+#: nodes and element names listed without --verbose (a 10,000-cell array has 30,000 nodes)
+LISTED = 20
 
 
 def main(args) -> int:
@@ -22,7 +28,7 @@ def main(args) -> int:
     deck.validate()
     netlist_args.check_nodes(deck.circuit, args.strict)
     print(f"{args.netlist}: ok")
-    print(deck.circuit.summary())
+    print(summary(deck.circuit, args.verbose))
     analyses = ", ".join(f".{a.kind}" for a in deck.analyses) or "none"
     print(f"  analyses: {analyses}")
     if deck.steps:
@@ -30,3 +36,24 @@ def main(args) -> int:
     if deck.measures:
         print("  measurements: " + ", ".join(m.name for m in deck.measures))
     return 0
+
+
+def summary(circuit, verbose: bool = False) -> str:
+    """Counts of nodes and elements (by kind), then their names: at most :data:`LISTED` of
+    each unless ``verbose``."""
+    kinds: dict[str, int] = {}
+    for e in circuit.elements.values():
+        kinds[e.kind] = kinds.get(e.kind, 0) + 1
+    nodes = circuit.nodes
+    lines = [f"circuit {circuit.title!r}: {len(nodes)} nodes, {len(circuit.elements)} elements"]
+    lines += [f"  {k}: {v}" for k, v in sorted(kinds.items())]
+    lines.append(_names("nodes", nodes, verbose))
+    lines.append(_names("elements", list(circuit.elements), verbose))
+    return "\n".join(lines)
+
+
+def _names(label: str, names: list, verbose: bool) -> str:
+    shown = names if verbose else names[:LISTED]
+    more = len(names) - len(shown)
+    return f"  {label}: " + " ".join(shown) + (f" … and {more} more (--verbose lists all)"
+                                               if more else "")
