@@ -10,7 +10,7 @@ from scipy.optimize import brentq
 
 from pneunet import Circuit, ParameterError
 from pneunet.errors import NetlistError
-from pneunet.netlist import parse_netlist
+from pneunet.netlist import parse_netlist, print_circuit
 from pneunet.waveforms import Step
 
 R_AIR = 8.314 / 28.965e-3   # J/(kg·K)
@@ -127,3 +127,13 @@ def test_netlist_tube_matches_the_python_api():
                          "segments=3\n.op\n.end\n")
     assert [e for e in deck.circuit.elements if e.startswith("T1")] == ["T1.s1", "T1.s2", "T1.s3"]
     assert deck.circuit.elements["T1.s2"].params["length"] == pytest.approx(2000.0 / 3)
+
+
+def test_printed_segments_parse_back_to_the_same_line():
+    c = Circuit("line", ambient=100.0)
+    c.pressure_source("P1", "a", 300.0)
+    c.tube("T1", "a", "atm", length=2000.0, diameter=1.0, segments=3)
+    again = parse_netlist(print_circuit(c)).circuit
+    assert list(again.elements) == list(c.elements)
+    assert again.op(stability=False).flows["T1.s3"] == pytest.approx(
+        c.op(stability=False).flows["T1.s3"], rel=1e-9)
