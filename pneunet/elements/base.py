@@ -51,13 +51,13 @@ class Param:
         return self.default is None
 
     def check(self, value: float, where: str, name: str) -> None:
-        from ..units import SLOTS, pretty
-
-        unit = f" {pretty(SLOTS[self.slot])}" if SLOTS[self.slot] else ""
         if not np.isfinite(value):
             raise ParameterError(f"{name} must be a finite number, got {value}", where=where)
         too_low = value < self.low if self.low_inclusive else value <= self.low
         if too_low or value > self.high:
+            from ..units import SLOTS, pretty
+
+            unit = f" {pretty(SLOTS[self.slot])}" if SLOTS[self.slot] else ""
             lo = "[" if self.low_inclusive else "("
             raise ParameterError(
                 f"{name}={value:g}{unit} is outside its valid range {lo}{self.low:g}, {self.high:g}]",

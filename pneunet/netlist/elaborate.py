@@ -403,8 +403,6 @@ class _Builder(ModelCards, AnalysisStatements, MeasureStatements):
                    f"{got} ({parts[1]})", extra[1], hint)
 
     def _param_value(self, family, key, item, scope, full):
-        from ..waveforms import Waveform  # noqa: F401
-
         spec = family.params[key]
         label = f"{full}: {key}"
         if spec.kind == "object":

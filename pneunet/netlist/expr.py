@@ -17,6 +17,7 @@ import functools
 import math
 
 from ..errors import NetlistError, SourceSpan
+from .values import number_in_expression, split
 
 
 def _if(c, a, b):
@@ -137,8 +138,6 @@ class _Evaluator:
 
     def token(self, tok):
         if tok.type == "NUMBER":
-            from .values import number_in_expression, split
-
             magnitude, suffix = split(tok)
             if not suffix:  # a plain number: no span needed
                 return magnitude
