@@ -37,5 +37,12 @@ def check_nodes(circuit, strict: bool) -> None:
         raise TopologyError("node " + rest, where=where or None,
                             hint="connect the node, or fix its spelling (without --strict "
                                  "this is a warning)")
-    for warning in warnings:
+    for warning in warnings[:WARNED]:
         print(f"warning: {warning}", file=sys.stderr)
+    if len(warnings) > WARNED:
+        print(f"warning: … and {len(warnings) - WARNED} more nodes with one connection",
+              file=sys.stderr)
+
+
+#: dangling-node warnings printed (an array of cells can make thousands)
+WARNED = 20

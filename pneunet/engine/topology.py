@@ -87,22 +87,32 @@ def _components(nodes, edges) -> list[set[str]]:
     return list(groups.values())
 
 
+#: name comparisons spent on did-you-means (each compares one name with every node's)
+COMPARISONS = 50_000
+
+
 def dangling_nodes(circuit) -> list[str]:
     """Warnings for nodes with a single connection (a misspelt node name makes one, as
-    in SPICE): ``file:line: node 'tnak' has one connection (Rvent); did you mean 'tank'?``."""
+    in SPICE): ``file:line: node 'tnak' has one connection (Rvent); did you mean 'tank'?``.
+    The first ones get a did-you-mean among the connected nodes (at least one, as many as
+    :data:`COMPARISONS` name comparisons allow)."""
     import difflib
 
     seen: dict[str, list] = {}
     for spec in circuit.elements.values():
         for node in spec.nodes:
             seen.setdefault(node, []).append(spec)
+    dangling = [n for n, specs in seen.items() if len(specs) == 1 and
+                not circuit.is_reference(n) and not _internal_state(specs[0], n)]
+    if not dangling:
+        return []
+    connected = [n for n, specs in seen.items() if len(specs) > 1 and not circuit.is_reference(n)]
+    suggested = max(1, COMPARISONS // max(len(connected), 1))
     out = []
-    for node, specs in seen.items():
-        if len(specs) != 1 or circuit.is_reference(node) or _internal_state(specs[0], node):
-            continue
-        spec = specs[0]
-        others = [n for n in seen if n != node and not circuit.is_reference(n)]
-        close = difflib.get_close_matches(node, others, n=1, cutoff=0.6)
+    for i, node in enumerate(dangling):
+        spec = seen[node][0]
+        close = difflib.get_close_matches(node, connected, n=1, cutoff=0.6) \
+            if i < suggested else []
         where = f"{spec.span}: " if spec.span else ""
         out.append(f"{where}node {node!r} has one connection ({spec.name})"
                    + (f"; did you mean {close[0]!r}?" if close else ""))

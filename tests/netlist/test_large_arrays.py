@@ -70,3 +70,13 @@ def test_check_lists_at_most_twenty_names_unless_verbose(tmp_path, capsys):
     assert main(["check", "--verbose", str(path)]) == 0
     out = capsys.readouterr().out
     assert "more" not in out and "act[9]" in out and "Xcell[9].RV" in out
+
+
+def test_check_warns_about_twenty_dangling_nodes_then_counts_the_rest(tmp_path, capsys):
+    path = tmp_path / "cells.pn"  # every cell vents into a node of its own: 300 dangling nodes
+    path.write_text(cells_text(300).replace("RV act atm", "RV act vent"))
+    assert main(["check", str(path)]) == 0
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 21 and err[-1] == "warning: … and 280 more nodes with one connection"
+    assert "node 'Xcell[0].vent' has one connection (Xcell[0].RV); did you mean" in err[0]
+    assert "node 'Xcell[19].vent' has one connection (Xcell[19].RV)" in err[19]
