@@ -109,7 +109,7 @@ class AnalysisStatements:
                  "flow": "mdot"}.get(item.name.lower(), item.name)
             target = item.args[0].text
             if q == "p":
-                if target not in self.circuit.nodes:
+                if not self.has_node(target):
                     raise _err(f"unknown node {target!r}", item.args[0],
                                _close(target, self.circuit.nodes))
             elif target not in self.circuit.elements:

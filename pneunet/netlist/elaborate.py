@@ -8,6 +8,7 @@ draw a caret under it.
 """
 from __future__ import annotations
 
+import itertools
 import math
 import re
 
@@ -61,6 +62,8 @@ class _Builder(ModelCards, AnalysisStatements, MeasureStatements):
         self.models: dict[str, object] = {}
         self.model_spans: dict[str, SourceSpan] = {}
         self.converted: dict[tuple[str, str], float] = {}  # (literal, slot) -> value
+        self.node_set: set[str] = set()  # the nodes of the first node_count elements
+        self.node_count = 0
 
     # ---- top level
     def build(self) -> Deck:
@@ -245,6 +248,16 @@ class _Builder(ModelCards, AnalysisStatements, MeasureStatements):
         if options is None:
             self.converted[text, slot] = value
         return value
+
+    def has_node(self, node: str) -> bool:
+        """Whether an element added so far touches ``node``; the set grows with the circuit
+        (``circuit.nodes`` walks every element: once per ``.ic`` in an array was O(N²))."""
+        specs = self.circuit.elements
+        added = len(specs) - self.node_count
+        for spec in itertools.islice(reversed(specs.values()), added):
+            self.node_set.update(spec.nodes)
+        self.node_count = len(specs)
+        return node in self.node_set
 
     # ---- models
     def _fail_value(self, arg):
@@ -559,7 +572,7 @@ class _Builder(ModelCards, AnalysisStatements, MeasureStatements):
                            "must be > 0 (as for p0)", it.value,
                            "pressures are absolute; a gauge pressure carries a g: 100kPag")
             node = self._node(node, prefix, nodemap)
-            if node not in self.circuit.nodes:
+            if not self.has_node(node):
                 raise _err(f"initial condition for unknown node {node!r}", key,
                            _close(node, self.circuit.nodes))
             self.circuit.set_initial(node, value)

@@ -80,3 +80,11 @@ def test_check_warns_about_twenty_dangling_nodes_then_counts_the_rest(tmp_path, 
     assert len(err) == 21 and err[-1] == "warning: … and 280 more nodes with one connection"
     assert "node 'Xcell[0].vent' has one connection (Xcell[0].RV); did you mean" in err[0]
     assert "node 'Xcell[19].vent' has one connection (Xcell[19].RV)" in err[19]
+
+
+def test_ic_in_an_arrayed_subcircuit_and_a_long_save_line():
+    text = cells_text(50).replace("VC ctl 10mL\n", "VC ctl 10mL\n.ic ctl=150kPa\n")
+    text += ".save " + " ".join(f"p(act[{k}])" for k in range(50)) + "\n"
+    deck = parse_netlist(text, str(CELLS))
+    assert deck.circuit.initial == {f"Xcell[{k}].ctl": 150.0 for k in range(50)}
+    assert [s.target for s in deck.saves][-50:] == [f"act[{k}]" for k in range(50)]
