@@ -8,11 +8,13 @@ is a small table.  Dataclasses among them are declared with ``repr=False``.
 from __future__ import annotations
 
 import html
+from abc import ABC, abstractmethod
 
 
-class Summarized:
+class Summarized(ABC):
     """Mixin: ``__repr__`` and ``_repr_html_`` from ``_summary()``."""
 
+    @abstractmethod
     def _summary(self) -> tuple[str, list[tuple[str, str]], str]:
         raise NotImplementedError
 

@@ -12,6 +12,8 @@ with its end slopes outside the table.  Signal ``V_<name>`` is the volume, mL.
 """
 from __future__ import annotations
 
+from abc import abstractmethod
+
 import numpy as np
 
 from ..errors import ParameterError
@@ -31,6 +33,7 @@ class _ElasticVolume(StorageNode):
         self._rho_per_p = context.gas.capacitance(1.0, context.options.temperature)  # mg/(kPa·mL)
         self._liquid = context.options.liquid
 
+    @abstractmethod
     def volume(self, p):
         """V (mL), dV/dp (mL/kPa) and d²V/dp² of each instance at pressures p (..., n)."""
         raise NotImplementedError

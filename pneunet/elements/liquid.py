@@ -13,6 +13,8 @@ the band ε = flow_band/(2·ambient) kPa: the gas band mapped through p_a² − 
 """
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
+
 import numpy as np
 
 from ..errors import ParameterError
@@ -23,7 +25,7 @@ from .base import ElementFamily, Param
 _OUT_IN = np.array([1.0, -1.0])  # a flow a→b leaves node a and enters node b
 
 
-class _LiquidLaw(ElementFamily):
+class _LiquidLaw(ElementFamily, ABC):
     """Flow a→b from Δp = p_a − p_b; subclasses give :meth:`law` (ṁ, dṁ/dΔp)."""
 
     ports = ("a", "b")
@@ -36,6 +38,7 @@ class _LiquidLaw(ElementFamily):
             raise ParameterError(f"{self.kind} {self.names[0]} needs a liquid circuit",
                                  hint=".options fluid=water (or Circuit(fluid='water'))")
 
+    @abstractmethod
     def law(self, dp, partials):
         raise NotImplementedError
 

@@ -13,6 +13,8 @@ n = 1 is isothermal (C = M·V/(R·T), the paper's eq. 29); n = 1.4 adiabatic air
 """
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
+
 import numpy as np
 
 from ..errors import ParameterError
@@ -20,7 +22,7 @@ from . import register
 from .base import ElementFamily, Param
 
 
-class StorageNode(ElementFamily):
+class StorageNode(ElementFamily, ABC):
     """Mass stored at one node through a capacitance: outflow C(p)·ṗ (subclasses give
     :meth:`capacitance`) and an initial pressure ``p0``."""
 
@@ -28,6 +30,7 @@ class StorageNode(ElementFamily):
     storage_ports = (0,)
     fluids = ("gas", "liquid")
 
+    @abstractmethod
     def capacitance(self, p):
         """C(p) in mg/kPa and dC/dp, for pressures p (..., n)."""
         raise NotImplementedError
