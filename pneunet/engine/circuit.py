@@ -60,11 +60,12 @@ class Circuit:
                                 hint=f"first defined at {first}" if first else "names must be unique")
         fluid = "gas" if self.options.liquid is None else "liquid"
         if fluid not in family.fluids:
+            fitting = [k for k in elements.known_kinds() if fluid in elements.family(k).fluids]
             raise ParameterError(
                 f"{family.kind} is a {' or '.join(family.fluids)} element; this circuit's fluid is "
                 f"{self.options.fluid}", where=where,
-                hint="liquid circuits: orifice, laminar_tube, volume, accumulator, pv_volume, "
-                     "sources" if fluid == "liquid" else "liquids need .options fluid=water")
+                hint=f"{fluid} circuits: " + ", ".join(fitting)
+                     + ("" if fluid == "liquid" else "; liquids need .options fluid=water"))
         nodes = tuple(str(n) for n in nodes)
         if len(nodes) != len(family.ports):
             raise TopologyError(
