@@ -4,6 +4,7 @@ from __future__ import annotations
 import json
 
 from . import netlist_args
+from .executors import add_executor_args
 
 
 def register(subparsers) -> None:
@@ -35,10 +36,7 @@ def register(subparsers) -> None:
     p.add_argument("--max-evaluations", type=int, default=25, metavar="N",
                    help="least-squares iterations per start (default 25)")
     p.add_argument("--seed", type=int, default=0, help="seed of the Latin hypercube and the yield's samples")
-    p.add_argument("--workers", type=int, default=None,
-                   help="local worker processes (default: all cores; 1 = no pool)")
-    p.add_argument("--dask", metavar="ADDRESS", default=None,
-                   help="run on a dask.distributed scheduler (ADDRESS or 'local')")
+    add_executor_args(p)
     y = p.add_argument_group("yield under manufacturing spread")
     y.add_argument("--yield", dest="n_yield", type=int, default=0, metavar="N",
                    help="Monte Carlo samples of the spread at the design (or, without "

@@ -4,6 +4,15 @@ from __future__ import annotations
 import contextlib
 
 
+def add_executor_args(parser) -> None:
+    """``--workers N`` and ``--dask ADDRESS|local`` (read by :func:`dask_or_local`)."""
+    parser.add_argument("--workers", type=int, default=None,
+                        help="local worker processes (default: all cores; 1 = no pool)")
+    parser.add_argument("--dask", metavar="ADDRESS", default=None,
+                        help="run on a dask.distributed scheduler (ADDRESS, or 'local' for a "
+                             "LocalCluster on this machine)")
+
+
 @contextlib.contextmanager
 def dask_or_local(address: str | None, workers: int | None):
     """A ``dask.distributed`` client (``'local'``: a LocalCluster of ``workers`` processes,

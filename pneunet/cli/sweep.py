@@ -6,6 +6,7 @@ import sys
 from pathlib import Path
 
 from . import netlist_args
+from .executors import add_executor_args
 
 
 def register(subparsers) -> None:
@@ -41,11 +42,7 @@ def register(subparsers) -> None:
     p.add_argument("--node", default="tank", help="node analysed for oscillation (default tank)")
     p.add_argument("--t-stop", type=float, default=None, metavar="S",
                    help="fixed transient length; default: simulate until the cycle converges")
-    p.add_argument("--workers", type=int, default=None,
-                   help="local worker processes (default: all cores; 1 = no pool)")
-    p.add_argument("--dask", metavar="ADDRESS", default=None,
-                   help="run on a dask.distributed scheduler (ADDRESS, or 'local' for a "
-                        "LocalCluster on this machine)")
+    add_executor_args(p)
     p.add_argument("--out", "-o", metavar="CSV", default="sweep.csv",
                    help="table to write (default sweep.csv)")
     p.add_argument("--store", metavar="JSONL", default=None,
