@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .. import elements
 from ..errors import PneunetError
 from ..laws import Scalar, valve_conductance
 from ..reprs import Summarized
@@ -325,10 +326,14 @@ def spec_from_circuit(circuit, node: str | None = None) -> OscillatorSpec:
     """Recognise the oscillator in a circuit: a valve fed by a pressure source whose
     output reaches its own control node through a resistor (or directly), the control
     node vented through a resistor to a pressure source or the ambient.  A volume with
-    an energy balance counts as the volume: a ``thermal_inlet``'s line node as its
-    chamber's node."""
+    an energy balance counts as the volume, the line node of a link into it
+    (``thermal_inlet``: ``ElementFamily.link_ports``) as its node."""
     els = circuit.elements
-    chamber_of = {e.nodes[0]: e.nodes[1] for e in els.values() if e.kind == "thermal_inlet"}
+    chamber_of = {}
+    for e in els.values():
+        link = elements.family(e.kind).link_ports
+        if link:
+            chamber_of[e.nodes[link[0]]] = e.nodes[link[1]]
 
     def at(r):  # a resistor's nodes, a link into a chamber read as the chamber
         return {chamber_of.get(n, n) for n in r.nodes}

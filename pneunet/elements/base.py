@@ -101,6 +101,8 @@ class ElementFamily:
     flow_ports: ClassVar[tuple[int, ...] | None] = None  # ports that pass flow (None: all)
     storage_ports: ClassVar[tuple[int, ...]] = ()
     pinned_ports: ClassVar[tuple[int, ...]] = ()
+    #: (a, b): the element is a zero-resistance link, port a's node at port b's pressure
+    link_ports: ClassVar[tuple[int, int] | None] = None
     fluids: ClassVar[tuple[str, ...]] = ("gas",)  # 'gas' and/or 'liquid': where its law holds
 
     def __init__(self, specs: list[ElementSpec], context: FamilyContext):

@@ -183,6 +183,7 @@ class ThermalInlet(ElementFamily):
     aliases = ()
     description = "one line into a thermal_chamber: mass and enthalpy of the flow"
     ports = ("line", "node", "heat")
+    link_ports = (0, 1)
     params = {
         "r": Param("resistance", "link resistance, kPa·s/mg (small)", low=0.0,
                    low_inclusive=False, default=1e-5),

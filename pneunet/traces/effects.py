@@ -31,9 +31,6 @@ GRID_POINTS = (5, 3, 2)
 #: (a thermal_inlet is a zero-resistance link into a chamber: a tube there is a tube at
 #: the line it joins)
 SERIES_KINDS = ("resistor", "pipe", "thermal_inlet")
-#: zero-resistance links into a volume: their line node (port 0) is at the volume's
-#: pressure, so a dead volume there is more of that volume, not a dead volume
-LINK_KINDS = ("thermal_inlet",)
 
 
 class CircuitEffect(ABC):
@@ -178,8 +175,8 @@ class DeadVolume(CircuitEffect):
             fam = elements.family(s.kind)
             stored.update(s.nodes[p] for p in fam.storage_ports)
             pinned.update(s.nodes[p] for p in fam.pinned_ports)
-            if s.kind in LINK_KINDS:  # the link's line node is at its volume's pressure
-                stored.add(s.nodes[0])
+            if fam.link_ports:  # a link's line node is at its volume's pressure: a dead
+                stored.add(s.nodes[fam.link_ports[0]])  # volume there is more of that volume
         return [DeadVolume(n) for n in circuit.nodes
                 if n not in stored and n not in pinned and not circuit.is_reference(n)]
 
