@@ -1,12 +1,15 @@
 """The tube element (issue 12): a gas line's resistance and volume in N lumped segments.
 
 References are written here independently: Hagen–Poiseuille for isothermal gas,
-Blasius and eq. 6 (Weymouth) friction, the gas law for the stored mass, and the
-linear diffusion of a small pressure step into a closed line.
+Blasius and eq. 6 (Weymouth) friction, the gas law for the stored mass, the
+linear diffusion of a small pressure step into a closed line, and a finite-volume
+line (many cells, scipy's solve_ivp) filling a volume from the paper's supply.
 """
 import numpy as np
 import pytest
+from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
+from scipy.sparse import diags
 
 from pneunet import Circuit, ParameterError
 from pneunet.errors import NetlistError
@@ -52,6 +55,29 @@ def test_turbulent_flow_follows_blasius():
     expected = brentq(excess, 1e-7, 1.0) * 1e6
     assert _reynolds(mdot, 4.0) > 1e4
     assert mdot == pytest.approx(expected, rel=2e-3)
+
+
+def _blasius_flow(delta_pa2, length, diameter):
+    """Turbulent flow (kg/s) with Fanning f = 0.0791·Re^(−1/4): Δ = 64·f·R_s·T·L·ṁ²/(π²·D⁵)."""
+    k = 64 * R_AIR * T * length / (np.pi ** 2 * diameter ** 5)
+    return brentq(lambda m: k * 0.0791 * (4 * m / (np.pi * diameter * MU)) ** -0.25 * m * m
+                  - delta_pa2, 1e-12, 10.0)
+
+
+@pytest.mark.parametrize("p_a", [100.05, 100.2, 100.5, 130.0, 250.0, 600.0])
+def test_each_law_holds_in_its_reynolds_range(p_a):
+    """Within 1 % of Hagen–Poiseuille below Re = 200, of Blasius above Re = 3,500."""
+    d, l = 2e-3, 1.0
+    mdot, _ = _steady_flow(p_a, length=l * 1e3, diameter=d * 1e3)
+    delta = (p_a * 1e3) ** 2 - 100e3 ** 2
+    re = _reynolds(mdot, d * 1e3)
+    laminar = np.pi * d ** 4 * delta / (256 * MU * R_AIR * T * l) * 1e6
+    if re < 200:
+        assert mdot == pytest.approx(laminar, rel=0.01), re
+    elif re > 3500:
+        assert mdot == pytest.approx(_blasius_flow(delta, l, d) * 1e6, rel=0.01), re
+    else:  # transition: below both laws
+        assert mdot < min(laminar, _blasius_flow(delta, l, d) * 1e6), re
 
 
 def test_explicit_friction_factor_is_eq6():
@@ -137,3 +163,55 @@ def test_printed_segments_parse_back_to_the_same_line():
     assert list(again.elements) == list(c.elements)
     assert again.op(stability=False).flows["T1.s3"] == pytest.approx(
         c.op(stability=False).flows["T1.s3"], rel=1e-9)
+
+
+# -- fill time through a long line against a finite-volume line ----------------------------
+AMB, SUPPLY = 96.0, 496.0  # kPa, the paper's vent and supply pressures
+
+
+def _fv_segment_flow(p_a, p_b, dx, d):
+    """kg/s through dx metres of line (Pa): the documented law, laminar and Blasius blended
+    by ṁ = (ṁ_lam⁻⁴ + ṁ_turb⁻⁴)^(−1/4)."""
+    delta = p_a ** 2 - p_b ** 2
+    lam = np.abs(delta) * np.pi * d ** 4 / (256 * MU * R_AIR * T * dx)
+    b = 64 * R_AIR * T * dx / (np.pi ** 2 * d ** 5) * 0.0791 * (4 / (np.pi * d * MU)) ** -0.25
+    turb = (np.abs(delta) / b) ** (4 / 7)
+    with np.errstate(divide="ignore"):
+        return np.where(delta == 0, 0.0, np.sign(delta) * (lam ** -4 + turb ** -4) ** -0.25)
+
+
+def _fv_fill_time(length, d, volume, level, cells=400):
+    """Time (s) for a volume (m³) at the end of a line, all at AMB, to reach ``level`` (kPa)
+    once the supply steps to SUPPLY: ``cells`` cells of gas (isothermal, mass per cell
+    A·dx·p/(R_s·T)), the volume a last cell with no outflow."""
+    dx = length / cells
+    caps = np.r_[np.full(cells, np.pi / 4 * d ** 2 * dx), volume] / (R_AIR * T)  # kg/Pa
+    lengths = np.r_[dx / 2, np.full(cells - 1, dx), dx / 2]  # supply→cell 1 … cell n→volume
+
+    def rate(t, p):
+        inflow = _fv_segment_flow(np.r_[SUPPLY * 1e3, p[:-1]], p, lengths, d)
+        return (inflow - np.r_[inflow[1:], 0.0]) / caps
+
+    def reached(t, p):
+        return p[-1] - level * 1e3
+    reached.terminal = True
+    out = solve_ivp(rate, (0.0, 60.0), np.full(cells + 1, AMB * 1e3), method="BDF",
+                    jac_sparsity=diags([1.0, 1.0, 1.0], [-1, 0, 1], shape=(cells + 1,) * 2),
+                    rtol=1e-8, atol=1e-3, events=reached)
+    return out.t_events[0][0]
+
+
+@pytest.mark.parametrize("volume_ml", [120.0, 1.0])
+def test_fill_time_through_a_long_line_matches_a_finite_volume_line(volume_ml):
+    """2 m of 2 mm tubing (default segments: 10) fills a volume from the paper's supply
+    (96 → 496 kPa at t = 0); "filled" is 90 % of the supply's gauge pressure (456 kPa).
+    120 mL: the line's resistance sets the time; 1 mL: its own volume (6.3 mL) does."""
+    level = AMB + 0.9 * (SUPPLY - AMB)
+    c = Circuit("fill", ambient=AMB, rtol=1e-7, atol=1e-7)
+    c.pressure_source("P1", "s", Step(AMB, SUPPLY, at=0.0))
+    c.tube("T1", "s", "tank", length="2m", diameter="2mm")
+    c.volume("V1", "tank", V=volume_ml)
+    sol = c.tran(2.0, t_step=1e-4)
+    t_fill = np.interp(level, sol.pressure("tank"), sol.t)
+    t_ref = _fv_fill_time(2.0, 2e-3, volume_ml * 1e-6, level)
+    assert t_fill == pytest.approx(t_ref, rel=0.03)
