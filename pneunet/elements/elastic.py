@@ -6,9 +6,11 @@ The mass stored is m = ρ(p)·V(p) with ρ = p·M/(R·T), so the capacitance is
 
 (ρ·dV/dp plus V·dρ/dp).  In a liquid circuit (density ρ, bulk modulus K; see
 :mod:`pneunet.liquids`) the wall compliance adds to the liquid's: C = ρ·(V/K + dV/dp).  ``accumulator``: V = V0 + k·(p − pref), valid while V > 0.
-``pv_volume``: V(p) from a table of (p, V) points (a measured curve; V must not decrease),
-interpolated by a monotone cubic (scipy's PchipInterpolator, C¹) and continued linearly
-with its end slopes outside the table.  Signal ``V_<name>`` is the volume, mL.
+``pv_volume`` (aliases ``pv_actuator``, ``free_actuator``: the data-driven actuator, a pouch
+or bellows, FONSim's FreeActuator): V(p) from a table of (p, V) points (a measured curve;
+V must not decrease), interpolated by a monotone cubic (scipy's PchipInterpolator, C¹) and
+continued linearly with its end slopes outside the table.  Signal ``V_<name>`` is the
+volume, mL.
 """
 from __future__ import annotations
 
@@ -85,7 +87,9 @@ class PressureVolumeCurve(_ElasticVolume):
     """Elastic volume whose V(p) is a table of measured points (monotone cubic)."""
 
     kind = "pv_volume"
-    description = "elastic volume from a pressure–volume table (CSV p_kPa,V_mL; PCHIP)"
+    aliases = ("pv_actuator", "free_actuator")
+    description = ("pressure–volume actuator (pouch, bellows): elastic volume from a table "
+                   "of measured points (CSV p_kPa,V_mL; PCHIP)")
     table_slots = ("pressure", "volume")
     params = {
         "table": Param("volume", "(p kPa, V mL) points, or a CSV file with columns "
@@ -98,9 +102,9 @@ class PressureVolumeCurve(_ElasticVolume):
         p, v = (np.asarray(x, dtype=float) for x in spec.params["table"])
         problem = ("needs at least two points" if p.ndim != 1 or p.shape != v.shape or p.size < 2
                    else "holds a value that is not finite" if not np.all(np.isfinite([p, v]))
-                   else "pressures must increase from point to point" if np.any(np.diff(p) <= 0)
-                   else "volumes must be > 0 and must not decrease with pressure"
-                   if v[0] <= 0 or np.any(np.diff(v) < 0) else None)
+                   else _first_fault(p, np.diff(p) <= 0, "pressures must increase")
+                   or (f"volumes must be > 0: V = {v[0]:g} mL at {p[0]:g} kPa" if v[0] <= 0
+                       else _first_fault(p, np.diff(v) < 0, "volumes must not decrease", v)))
         if problem:
             raise ParameterError(f"the pressure–volume table {problem}", where=spec.where,
                                  hint="a table of (p kPa, V mL) points, p increasing")
@@ -130,3 +134,13 @@ class PressureVolumeCurve(_ElasticVolume):
             out[1][..., i] = np.where(outside, end_slope, slope(inside))
             out[2][..., i] = np.where(outside, 0.0, bend(inside))
         return out[0], out[1], out[2]
+
+
+def _first_fault(p, bad, rule, v=None):
+    """``rule`` and the first pair of points that breaks it (kPa, mL), or None."""
+    if not bad.any():
+        return None
+    i = int(np.argmax(bad))
+    show = (lambda k: f"{v[k]:g} mL at {p[k]:g} kPa") if v is not None else \
+        (lambda k: f"{p[k]:g} kPa")
+    return f"{rule} from point to point: point {i + 2} ({show(i + 1)}) after {show(i)}"
