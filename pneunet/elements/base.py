@@ -15,6 +15,9 @@ instances at once.  The assembler only sees this interface:
   become differential unknowns);
 * ``pinned_ports`` and ``pinned_pressure(t)``: ports whose node pressure the
   element imposes (pressure sources);
+* ``state_ports``: ports at internal nodes that carry the element's own state as a
+  pressure-like unknown (a muscle's contraction): never floating or dangling, no dead
+  volume there, and no pressure of theirs in results;
 * ``signals(t, p)``: named per-instance results for the solution (flows…);
 * ``fluids``: the fluids its law holds for ('gas', 'liquid'; see ``.options fluid``).
 
@@ -101,6 +104,7 @@ class ElementFamily:
     flow_ports: ClassVar[tuple[int, ...] | None] = None  # ports that pass flow (None: all)
     storage_ports: ClassVar[tuple[int, ...]] = ()
     pinned_ports: ClassVar[tuple[int, ...]] = ()
+    state_ports: ClassVar[tuple[int, ...]] = ()  # internal state nodes, not pressures
     #: (a, b): the element is a zero-resistance link, port a's node at port b's pressure
     link_ports: ClassVar[tuple[int, int] | None] = None
     fluids: ClassVar[tuple[str, ...]] = ("gas",)  # 'gas' and/or 'liquid': where its law holds

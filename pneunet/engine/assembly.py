@@ -44,10 +44,12 @@ class CircuitDAE:
         specs = list(circuit.elements.values())
         pinned_by = {}
         storage_nodes = set()
+        self.state_nodes = set()  # elements' own states (state_ports): no pressures
         for spec in specs:
             fam = elements.family(spec.kind)
             pinned_by.update({spec.nodes[p]: spec.name for p in fam.pinned_ports})
             storage_nodes.update(spec.nodes[p] for p in fam.storage_ports)
+            self.state_nodes.update(spec.nodes[p] for p in fam.state_ports)
         nodes = circuit.nodes
         references = [n for n in nodes if circuit.is_reference(n)]
         fixed = set(pinned_by) | set(references)
@@ -56,8 +58,9 @@ class CircuitDAE:
         if self.options.dead_volume > 0:
             specs += [ElementSpec("volume", f"_dead_{n}", (n,),
                                   {"V": self.options.dead_volume, "n": 1.0, "p0": np.nan})
-                      for n in self.node_names if n not in storage_nodes]
-            storage_nodes.update(self.node_names)
+                      for n in self.node_names
+                      if n not in storage_nodes and n not in self.state_nodes]
+            storage_nodes.update(n for n in self.node_names if n not in self.state_nodes)
         self.n = len(self.node_names)
         index = {name: i for i, name in enumerate(self.node_names + self.fixed_names)}
         self._index = index

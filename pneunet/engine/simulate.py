@@ -350,7 +350,8 @@ def _build_solution(dae, times, states, stats, branch_jumps) -> Solution:
     history = functools.cache(lambda: dae.full_pressures(times, states))
     ready, units, pending = {}, {}, {}
     for i, name in enumerate(dae.node_names):
-        ready[f"p_{name}"] = states[:, i]
+        if name not in dae.state_nodes:  # an element's own state: in its signals
+            ready[f"p_{name}"] = states[:, i]
     fixed = [f"p_{name}" for name in dae.fixed_names if not dae.circuit.is_reference(name)]
 
     def fixed_pressures():

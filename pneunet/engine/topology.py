@@ -24,7 +24,7 @@ def check_topology(circuit) -> None:
         raise TopologyError("the circuit has no elements")
     nodes = circuit.nodes  # a property that walks every element: once here
     pinned: dict[str, str] = {n: "reference" for n in nodes if circuit.is_reference(n)}
-    storage: set[str] = set()
+    storage: set[str] = set()  # and elements' state nodes: neither floats
     flow_edges: list[tuple[str, str]] = []
     touched_by_flow: set[str] = set()
     for spec in circuit.elements.values():
@@ -38,7 +38,7 @@ def check_topology(circuit) -> None:
                     where=_where(spec), hint="a node takes at most one pressure source; "
                     "reference nodes 0/gnd/atm are already at ambient pressure")
             pinned[node] = spec.name
-        storage.update(spec.nodes[p] for p in family.storage_ports)
+        storage.update(spec.nodes[p] for p in family.storage_ports + family.state_ports)
         ports = family.passing_flow(len(spec.nodes))
         flow_nodes = [spec.nodes[p] for p in ports]
         touched_by_flow.update(flow_nodes)
@@ -126,4 +126,5 @@ def _internal_state(spec, node) -> bool:
 
     family = elements.family(spec.kind)
     port = spec.nodes.index(node)
-    return port in family.storage_ports and port not in family.passing_flow(len(spec.nodes))
+    return (port in family.storage_ports + family.state_ports
+            and port not in family.passing_flow(len(spec.nodes)))
