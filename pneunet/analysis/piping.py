@@ -1,0 +1,331 @@
+"""Piping footprint of a soft robot (paper Fig. 1B): tubing cross-section and fill times.
+
+A robot of N actuators (each a volume, mL) sits at the end of tubes of length L (mm) from
+its pressure source.  Three designs are compared, every valve the same membrane valve
+(normally open: a control pressure at the supply closes it, ambient opens it):
+
+``individual``
+    one power line per actuator; its valve at the source, driven directly;
+``supply+control``
+    one supply line to the robot, a valve at each actuator, one thin control line per
+    valve from the source;
+``demux``
+    one supply (data) line, ⌈log₂ N⌉ thin address lines, and at the robot a binary
+    demultiplexer as in ``netlists/demux3.pn``: per address bit a local inverter (valve
+    from the supply, pull-down 20 kPa·s/mg, 2 mL), per actuator a chain of ⌈log₂ N⌉ valves
+    (0.5 mL between them) that passes only when the address is the actuator's number.
+
+Footprint: the sum of π/4·D² over all lines, by outer diameter (what the tubing occupies)
+and by bore (mm²).  Fill time: from the command at the source (t = 0) to the actuator's
+pressure reaching ``level`` of the supply's gauge pressure, simulated with every line a
+``tube`` element (laminar/Blasius, its own volume), from the idle state: supply line at
+the supply pressure, control lines at the level that holds the valves closed, actuators at
+ambient.  "alone": one actuator commanded; "all": every actuator commanded at once
+(``demux``: one at a time, so the sum of the single fill times).  Nothing is scaled: the
+designs differ only in their tubes and where the valves sit.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field, replace
+
+import numpy as np
+
+from ..errors import ParameterError
+from ..reprs import Summarized, number
+
+DESIGNS = ("individual", "supply+control", "demux")
+INVERTER_PULL_DOWN = 20.0   # kPa·s/mg, as in netlists/demux3.pn
+INVERTER_VOLUME = 2.0       # mL
+CHAIN_VOLUME = 0.5          # mL between two valves of a demultiplexer cell
+
+
+@dataclass(frozen=True)
+class Tubing:
+    """A tube size: bore (inner) and outer diameter, mm."""
+
+    bore: float
+    outer: float
+
+    def __post_init__(self):
+        if not 0 < self.bore < self.outer:
+            raise ParameterError(f"tubing {self.bore:g}/{self.outer:g} mm: the bore must be "
+                                 "> 0 and smaller than the outer diameter")
+
+    def area(self, which: str) -> float:
+        """Cross-section π/4·D² (mm²) of the ``bore`` or the ``outer`` diameter."""
+        return math.pi / 4 * getattr(self, which) ** 2
+
+
+@dataclass(frozen=True)
+class PipingSpec:
+    """The robot and its tubes.  The defaults are the paper's Fig. 1B arm as we read it:
+    four actuators; power and supply lines 2.5 mm bore (the paper's hose, sec. 4.2) in
+    4 mm tubing, control lines 1.2 mm bore in 3 mm tubing (outer diameters assumed: the
+    paper gives none); 1 m of line, 50 mL actuators, the paper's 496/96 kPa."""
+
+    actuators: int = 4
+    length: float = 1000.0                          # mm, source to robot, every line
+    volume: float = 50.0                            # mL per actuator
+    power: Tubing = Tubing(2.5, 4.0)                # individual lines
+    control: Tubing = Tubing(1.2, 3.0)              # control and address lines
+    supply: Tubing | None = None                    # shared line (default: ``power``)
+    valve: str = "axi"
+    p_supply: float = 496.0                         # kPa abs
+    ambient: float = 96.0                           # kPa abs
+    level: float = 0.9                              # "filled": this fraction of the gauge
+    t_stop: float = 10.0                            # s, longest simulated fill
+
+    def __post_init__(self):
+        checks = [("actuators", self.actuators >= 1 and self.actuators == int(self.actuators),
+                   "a whole number >= 1"), ("length", self.length > 0, "> 0 mm"),
+                  ("volume", self.volume > 0, "> 0 mL"),
+                  ("p_supply", self.p_supply > self.ambient, "above ambient"),
+                  ("level", 0 < self.level < 1, "in (0, 1)"), ("t_stop", self.t_stop > 0, "> 0 s")]
+        for name, ok, rule in checks:
+            if not ok:
+                raise ParameterError(f"piping: {name}={getattr(self, name)!r} must be {rule}")
+        if self.supply is None:
+            object.__setattr__(self, "supply", self.power)
+
+    @property
+    def bits(self) -> int:
+        """Address lines of the demultiplexer, ⌈log₂ N⌉ (at least 1)."""
+        return max(1, math.ceil(math.log2(self.actuators)))
+
+    @property
+    def filled(self) -> float:
+        """The pressure (kPa abs) an actuator must reach to count as filled."""
+        return self.ambient + self.level * (self.p_supply - self.ambient)
+
+
+def lines(spec: PipingSpec, design: str) -> list[tuple[str, int, Tubing]]:
+    """The lines from the source to the robot: (role, count, tubing)."""
+    n = spec.actuators
+    return {"individual": [("power", n, spec.power)],
+            "supply+control": [("supply", 1, spec.supply), ("control", n, spec.control)],
+            "demux": [("supply", 1, spec.supply), ("address", spec.bits, spec.control)],
+            }[_design(design)]
+
+
+def cross_section(spec: PipingSpec, design: str, which: str = "outer") -> float:
+    """Total tubing cross-section (mm²) of a design, by ``outer`` diameter or ``bore``."""
+    return sum(count * tube.area(which) for _, count, tube in lines(spec, design))
+
+
+def _design(name: str) -> str:
+    if name not in DESIGNS:
+        raise ParameterError(f"unknown piping design {name!r}", hint="one of " + ", ".join(DESIGNS))
+    return name
+
+
+# -- circuits ------------------------------------------------------------------------------
+def _idle(circuit, prefix: str, end: str, pressure: float, initial: dict) -> None:
+    """Record ``pressure`` as the idle state of a line: its end node and every internal
+    node of the tube named ``prefix``."""
+    initial[end] = pressure
+    initial.update({node: pressure for node in circuit.nodes if node.startswith(prefix + ".")})
+
+
+def build(spec: PipingSpec, design: str, commanded) -> "Circuit":
+    """The circuit of a design with the actuators in ``commanded`` switched on at t = 0
+    (nodes ``act0`` … ``act{N-1}``); ``demux`` takes one actuator."""
+    from ..engine.circuit import Circuit
+    from ..waveforms import Step
+
+    design, lo, hi = _design(design), spec.ambient, spec.p_supply
+    commanded = set(commanded)
+    c = Circuit(f"piping {design}, N={spec.actuators}", ambient=lo)
+    c.pressure_source("PS", "source", hi)
+    initial: dict[str, float] = {}
+    if design == "individual":
+        for k in range(spec.actuators):
+            c.pressure_source(f"PC{k}", f"c{k}", Step(hi, lo) if k in commanded else hi)
+            c.valve(f"X{k}", "source", f"v{k}", f"c{k}", model=spec.valve)
+            c.tube(f"T{k}", f"v{k}", f"act{k}", length=spec.length, diameter=spec.power.bore)
+            c.volume(f"A{k}", f"act{k}", V=spec.volume)
+        return c
+    c.tube("TS", "source", "robot", length=spec.length, diameter=spec.supply.bore)
+    _idle(c, "TS", "robot", hi, initial)
+    if design == "supply+control":
+        for k in range(spec.actuators):
+            c.pressure_source(f"PC{k}", f"c{k}", Step(hi, lo) if k in commanded else hi)
+            c.tube(f"TC{k}", f"c{k}", f"ctl{k}", length=spec.length, diameter=spec.control.bore)
+            _idle(c, f"TC{k}", f"ctl{k}", hi, initial)
+            c.valve(f"X{k}", "robot", f"act{k}", f"ctl{k}", model=spec.valve)
+            c.volume(f"A{k}", f"act{k}", V=spec.volume)
+    else:
+        if len(commanded) != 1:
+            raise ParameterError("a demultiplexer fills one actuator at a time")
+        _demux(c, spec, commanded.pop(), initial)
+    for node, pressure in initial.items():
+        c.set_initial(node, pressure)
+    return c
+
+
+def _demux(c, spec: PipingSpec, target: int, initial: dict) -> None:
+    """Address lines, inverters and valve chains of the ``demux`` design; the address
+    switches at t = 0 from the complement of ``target`` (every line changes) to ``target``.
+    Line a0_i is low when bit i is 0, its inverted copy a1_i low when bit i is 1."""
+    from ..waveforms import Step
+
+    lo, hi, bits = spec.ambient, spec.p_supply, spec.bits
+    before = (2 ** bits - 1) ^ target
+
+    def bit(x, i):
+        return (x >> i) & 1
+    for i in range(bits):
+        was, now = (hi, lo) if bit(before, i) else (lo, hi)
+        c.pressure_source(f"PA{i}", f"s{i}", Step(was, now))
+        c.tube(f"TA{i}", f"s{i}", f"a0_{i}", length=spec.length, diameter=spec.control.bore)
+        _idle(c, f"TA{i}", f"a0_{i}", was, initial)
+        c.valve(f"XI{i}", "robot", f"a1_{i}", f"a0_{i}", model=spec.valve)
+        c.resistor(f"RI{i}", f"a1_{i}", "atm", R=INVERTER_PULL_DOWN)
+        c.volume(f"VI{i}", f"a1_{i}", V=INVERTER_VOLUME)
+        initial[f"a1_{i}"] = lo if was == hi else hi
+    for k in range(spec.actuators):
+        node, passing = "robot", True
+        for i in range(bits):
+            after = f"act{k}" if i == bits - 1 else f"n{k}_{i}"
+            c.valve(f"X{k}_{i}", node, after, f"a{bit(k, i)}_{i}", model=spec.valve)
+            if i < bits - 1:
+                c.volume(f"VN{k}_{i}", after, V=CHAIN_VOLUME)
+            passing = passing and bit(k, i) == bit(before, i)
+            initial[after] = hi if passing else lo   # the addressed cell is already full
+            node = after
+        c.volume(f"A{k}", f"act{k}", V=spec.volume)
+
+
+# -- fill times ----------------------------------------------------------------------------
+def _fill_times(sol, spec: PipingSpec, actuators) -> np.ndarray:
+    """Time (s) at which each actuator first reaches ``spec.filled`` (NaN: never)."""
+    out = []
+    for k in actuators:
+        p = sol.pressure(f"act{k}")
+        i = np.flatnonzero(p >= spec.filled)
+        out.append(np.nan if not i.size else float(sol.t[0]) if i[0] == 0 else
+                   float(np.interp(spec.filled, p[i[0] - 1:i[0] + 1], sol.t[i[0] - 1:i[0] + 1])))
+    return np.array(out)
+
+
+def _run(spec: PipingSpec, design: str, commanded, record: int):
+    """Fill times of ``commanded`` and the trace (t s, p kPa) of actuator ``record``."""
+    sol = build(spec, design, commanded).tran(spec.t_stop, t_step=spec.t_stop / 2000)
+    return _fill_times(sol, spec, commanded), (sol.t, sol.pressure(f"act{record}"))
+
+
+@dataclass(repr=False)
+class DesignResult(Summarized):
+    """One design: its lines, cross-sections (mm²), fill times (s) and a fill trace."""
+
+    design: str
+    lines: list
+    outer_mm2: float
+    bore_mm2: float
+    alone_s: np.ndarray          # per actuator, commanded alone
+    all_s: float                 # every actuator filled (demux: one after the other)
+    trace: tuple = field(default=(), compare=False)   # (t, p) of actuator 0 filled alone
+
+    def _summary(self):
+        return self.design, [("outer", number(self.outer_mm2, "mm²")),
+                             ("alone", number(float(np.nanmax(self.alone_s)), "s")),
+                             ("all", number(self.all_s, "s"))], ".alone_s, .all_s, .trace"
+
+
+def evaluate(spec: PipingSpec, design: str) -> DesignResult:
+    """Cross-sections and simulated fill times of one design (see module doc)."""
+    n = spec.actuators
+    if design == "demux":
+        runs = [_run(spec, design, [k], k) for k in range(n)]
+        alone = np.array([r[0][0] for r in runs])
+        trace, total = runs[0][1], float(alone.sum())
+    else:  # actuators are alike: one commanded alone, then all at once
+        first, trace = _run(spec, design, [0], 0)
+        alone = np.full(n, first[0])
+        total = float(np.max(_run(spec, design, range(n), 0)[0])) if n > 1 else float(first[0])
+    return DesignResult(design, [(r, k, asdict(t)) for r, k, t in lines(spec, design)],
+                        cross_section(spec, design, "outer"), cross_section(spec, design, "bore"),
+                        alone, total, trace)
+
+
+@dataclass(repr=False)
+class PipingStudy(Summarized):
+    """The designs compared: ``table`` (pandas), ``results`` by design, ``as_dict()``."""
+
+    spec: PipingSpec
+    results: dict
+
+    def _summary(self):
+        rows = [(d, f"{number(r.outer_mm2, 'mm²')}, fills in "
+                    f"{number(float(np.nanmax(r.alone_s)), 's')}") for d, r in self.results.items()]
+        return f"N={self.spec.actuators}", rows, ".table, .as_dict(), plot_piping(study)"
+
+    @property
+    def table(self):
+        """One row per design: lines, cross-sections and saving against ``individual``
+        (%), fill times (s) of one actuator alone (slowest) and of all."""
+        import pandas as pd
+
+        base = {w: cross_section(self.spec, "individual", w) for w in ("outer", "bore")}
+        return pd.DataFrame([{
+            "design": d, "lines": sum(k for _, k, _ in r.lines),
+            "outer_mm2": r.outer_mm2, "saving_outer_pct": 100 * (1 - r.outer_mm2 / base["outer"]),
+            "bore_mm2": r.bore_mm2, "saving_bore_pct": 100 * (1 - r.bore_mm2 / base["bore"]),
+            "fill_alone_s": float(np.nanmax(r.alone_s)), "fill_all_s": r.all_s,
+        } for d, r in self.results.items()]).set_index("design")
+
+    def as_dict(self) -> dict:
+        """Plain data for JSON: the spec, the table and each actuator's fill time."""
+        spec = asdict(self.spec)
+        return {"spec": spec, "table": self.table.reset_index().to_dict(orient="records"),
+                "fill_alone_s": {d: r.alone_s.tolist() for d, r in self.results.items()}}
+
+
+def piping_study(spec: PipingSpec | None = None, designs=DESIGNS) -> PipingStudy:
+    """Evaluate ``designs`` for ``spec`` (default: :class:`PipingSpec`, Fig. 1B)."""
+    spec = spec or PipingSpec()
+    designs = [_design(d) for d in designs]
+    if "demux" in designs and spec.actuators < 2:
+        raise ParameterError("a demultiplexer needs at least 2 actuators")
+    return PipingStudy(spec, {d: evaluate(spec, d) for d in designs})
+
+
+def with_sizes(spec: PipingSpec, **sizes) -> PipingSpec:
+    """``spec`` with tube sizes given as 'bore/outer' mm strings, e.g. power='2.5/4'."""
+    return replace(spec, **{k: Tubing(*map(float, v.split("/"))) if isinstance(v, str) else v
+                            for k, v in sizes.items()})
+
+
+def plot_piping(study: PipingStudy, path=None):
+    """Cross-sections (left), fill times (middle) and actuator 0's pressure when filled
+    alone (right), one colour per design."""
+    from ..plotting import legend_outside, pyplot, save
+
+    plt = pyplot()
+    fig, (ax0, ax1, ax2) = plt.subplots(1, 3, figsize=(13, 3.8))
+    table, x = study.table, np.arange(len(study.results))
+    names = list(study.results)
+    ax0.bar(x - 0.2, table["outer_mm2"], 0.4, label="outer diameter", color="0.45")
+    ax0.bar(x + 0.2, table["bore_mm2"], 0.4, label="bore", color="0.75")
+    for xi, name, pct in zip(x, names, table["saving_outer_pct"]):
+        if name == "individual":
+            continue
+        ax0.annotate(f"{-pct:+.0f} %", (xi - 0.2, 0), xytext=(0, 3), textcoords="offset points",
+                     ha="center", fontsize="small", color="white")
+    ax0.set(ylabel="tubing cross-section (mm²)", title=f"N = {study.spec.actuators} actuators")
+    ax0.legend(frameon=False, fontsize="small")
+    ax1.bar(x - 0.2, table["fill_alone_s"], 0.4, label="one actuator")
+    ax1.bar(x + 0.2, table["fill_all_s"], 0.4, label="all (demux: in turn)")
+    ax1.set(ylabel=f"fill time to {100 * study.spec.level:.0f} % (s)")
+    ax1.legend(frameon=False, fontsize="small")
+    for ax in (ax0, ax1):
+        ax.set_xticks(x, names, fontsize="small")
+    for name, r in study.results.items():
+        ax2.plot(r.trace[0], r.trace[1], label=name)
+    ax2.axhline(study.spec.filled, color="0.6", lw=0.8, ls=":")
+    t_max = 1.5 * max(float(np.nanmax(r.alone_s)) for r in study.results.values())
+    ax2.set(xlim=(0, t_max if np.isfinite(t_max) else None), xlabel="time after command (s)",
+            ylabel="actuator 0 pressure (kPa)")
+    legend_outside(ax2, fontsize="small")
+    fig.tight_layout()
+    return save(fig, path) if path else fig
