@@ -34,6 +34,11 @@ SLOTS = {
     "frequency": "Hz",
     "compliance": "mL/kPa",  # volume per pressure of an elastic volume
     "dimensionless": "",
+    "mass": "kg",            # mechanical loads (mckibben)
+    "force": "N",
+    "stiffness": "N/m",
+    "damping": "N*s/m",
+    "angle": "deg",
 }
 
 #: common units converted without loading pint (its registry takes ~0.5 s to build):
@@ -51,6 +56,8 @@ FAST_FACTORS = {
     ("s", "time"): 1.0, ("ms", "time"): 1e-3, ("us", "time"): 1e-6, ("min", "time"): 60.0,
     ("K", "temperature"): 1.0, ("Hz", "frequency"): 1.0, ("kHz", "frequency"): 1e3,
     ("mL/kPa", "compliance"): 1.0, ("mL/bar", "compliance"): 0.01,
+    ("kg", "mass"): 1.0, ("g", "mass"): 1e-3, ("N", "force"): 1.0, ("N/m", "stiffness"): 1.0,
+    ("N/mm", "stiffness"): 1e3, ("N*s/m", "damping"): 1.0, ("deg", "angle"): 1.0,
 }
 
 GAUGE_UNITS = ("kPag", "barg", "psig", "Pag", "MPag", "mbarg", "hPag", "atmg")
@@ -150,6 +157,11 @@ _EXAMPLES = {
     "frequency": "2Hz",
     "compliance": "0.1mL/kPa or 10mL/bar",
     "dimensionless": "1.5",
+    "mass": "200g or 0.2kg",
+    "force": "5N",
+    "stiffness": "500N/m or 0.5N/mm",
+    "damping": "20N*s/m",
+    "angle": "25deg",
 }
 
 

@@ -37,7 +37,8 @@ def split(text: str):
 
 
 #: scale-factor letters that are also units of a slot's dimension (``1m`` is a metre)
-SCALE_LETTER_UNITS = {("m", "length"), ("µ", "length")}  # metre, micron
+SCALE_LETTER_UNITS = {("m", "length"), ("µ", "length"),  # metre, micron
+                      ("g", "mass"), ("t", "mass"), ("u", "mass")}  # gram, tonne, dalton
 
 
 #: what a unit may look like before pint is asked (pint's parser is slow on long text:

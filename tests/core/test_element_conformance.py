@@ -176,13 +176,30 @@ def _tube():
         kind="tube", nodes=("a", "b"), length=10.0, diameter=2.0, segments=1.5)
 
 
+def _mckibben():
+    c = Circuit("mckibben", ambient=100.0)
+    c.pressure_source("P1", "a", 250.0)
+    c.resistor("R1", "a", "b", R=1.0)
+    c.add("mckibben", "M1", ("b",), L0=150.0, D0=10.0, theta0=25.0, spring=400.0)  # static
+    c.resistor("R2", "a", "d", R=1.0)
+    c.add("mckibben", "M2", ("d",), L0=100.0, b=110.0, n=1.5, k_end=1.2, mass=0.2,
+          damping=30.0)                                                        # inertial
+    c.resistor("R3", "a", "e", R=1.0)
+    c.add("mckibben", "M3", ("e",), L0=100.0, D0=10.0, theta0=20.0, damping=20.0,
+          preload=5.0)                                                         # damped
+    return c, {"b": 250.0, "d": 250.0, "e": 250.0}, dict(kind="mckibben", nodes=("b",),
+                                                         L0=100.0, D0=10.0, theta0=60.0)
+
+
 CASES = {"pressure_source": _pressure_source, "flow_source": _flow_source,
          "resistor": _resistor, "pipe": _pipe, "volume": _volume, "actuator": _actuator,
          "valve": _valve, "thermal_volume": _thermal_volume,
          "thermal_chamber": _thermal_chamber, "thermal_inlet": _thermal_chamber,
          "check_valve": _check_valve, "accumulator": _accumulator, "pv_volume": _pv_volume,
          "orifice": _orifice, "laminar_tube": _laminar_tube,
-         "hysteretic_check_valve": _hysteretic_check_valve, "tube": _tube}
+         "hysteretic_check_valve": _hysteretic_check_valve, "tube": _tube,
+         "mckibben": _mckibben, "mckibben_static": _mckibben, "mckibben_damped": _mckibben,
+         "mckibben_inertial": _mckibben}
 
 
 def test_every_registered_family_has_a_conformance_case():
