@@ -1,17 +1,18 @@
 """Circuit design analyses (paper section 6): sweeps, oscillation, stationary branches,
-regime maps, design helpers and fluid-logic checks (fitting circuits to recorded
-traces: :mod:`pneunet.traces`).
+regime maps, design helpers, fluid-logic checks and the piping footprint (fitting
+circuits to recorded traces: :mod:`pneunet.traces`).
 
 Each module returns data (dataclasses, pandas tables); ``plot_*`` functions draw it
 through :mod:`pneunet.plotting`.  Modules are imported lazily::
 
-    from pneunet.analysis import sweep, oscillation, branches, regime, design, logic
+    from pneunet.analysis import sweep, oscillation, branches, regime, design, logic, piping
 """
 from __future__ import annotations
 
 import importlib
 
-_MODULES = ("sweep", "oscillation", "branches", "regime", "design", "logic", "circuits")
+_MODULES = ("sweep", "oscillation", "branches", "regime", "design", "logic", "circuits",
+            "piping")
 
 
 def __getattr__(name):

@@ -292,8 +292,19 @@ def piping_study(spec: PipingSpec | None = None, designs=DESIGNS) -> PipingStudy
 
 def with_sizes(spec: PipingSpec, **sizes) -> PipingSpec:
     """``spec`` with tube sizes given as 'bore/outer' mm strings, e.g. power='2.5/4'."""
-    return replace(spec, **{k: Tubing(*map(float, v.split("/"))) if isinstance(v, str) else v
+    return replace(spec, **{k: _tubing(k, v) if isinstance(v, str) else v
                             for k, v in sizes.items()})
+
+
+def _tubing(name: str, text: str) -> Tubing:
+    try:
+        bore, outer = (float(x) for x in text.split("/"))
+        return Tubing(bore, outer)
+    except ValueError:
+        raise ParameterError(f"{name}={text!r} is not BORE/OUTER in mm",
+                             hint="e.g. 2.5/4") from None
+    except ParameterError as err:
+        raise ParameterError(f"{name}: {err.message}") from None
 
 
 def plot_piping(study: PipingStudy, path=None):

@@ -15,7 +15,7 @@ import warnings
 
 #: sub-command modules, in the order ``pneunet --help`` lists them
 SUBCOMMAND_MODULES = ("run", "check", "fit", "diagnose", "sweep", "branches", "fit_trace",
-                       "design")
+                       "design", "piping")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -119,3 +119,21 @@ def test_one_power_line_fills_as_a_finite_volume_line_behind_the_valve():
 def test_bad_input_is_named(make, message):
     with pytest.raises(ParameterError, match=message):
         make()
+
+
+def test_command_line_prints_the_table_and_json(tmp_path, capsys):
+    import json
+
+    from pneunet.cli import main
+
+    assert main(["piping", "-n", "2", "--length", "0.5m", "--designs",
+                 "individual,supply+control", "--plot", str(tmp_path / "p.png")]) == 0
+    out = capsys.readouterr().out
+    assert "supply+control" in out and "saving %" in out and (tmp_path / "p.png").is_file()
+    assert main(["piping", "-n", "2", "--designs", "individual", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["spec"]["actuators"] == 2 and len(data["fill_alone_s"]["individual"]) == 2
+    assert main(["piping", "--control", "3/2"]) == 2
+    assert "control: tubing 3/2 mm" in capsys.readouterr().err
+    assert main(["piping", "--length", "3kg"]) == 2
+    assert "--length" in capsys.readouterr().err
