@@ -23,6 +23,10 @@ the supply pressure, control lines at the level that holds the valves closed, ac
 ambient.  "alone": one actuator commanded; "all": every actuator commanded at once
 (``demux``: one at a time, so the sum of the single fill times).  Nothing is scaled: the
 designs differ only in their tubes and where the valves sit.
+
+:func:`control_line_delays` shows what one control line does by itself: it delays and
+smooths the valve's control pressure, and the valve opens only once that pressure has
+fallen below a_in·p_in + a_out·p_out − p_close (eq. 25).
 """
 from __future__ import annotations
 
@@ -197,21 +201,24 @@ def _demux(c, spec: PipingSpec, target: int, initial: dict) -> None:
 
 
 # -- fill times ----------------------------------------------------------------------------
-def _fill_times(sol, spec: PipingSpec, actuators) -> np.ndarray:
-    """Time (s) at which each actuator first reaches ``spec.filled`` (NaN: never)."""
-    out = []
-    for k in actuators:
-        p = sol.pressure(f"act{k}")
-        i = np.flatnonzero(p >= spec.filled)
-        out.append(np.nan if not i.size else float(sol.t[0]) if i[0] == 0 else
-                   float(np.interp(spec.filled, p[i[0] - 1:i[0] + 1], sol.t[i[0] - 1:i[0] + 1])))
-    return np.array(out)
+def crossing(t, p, level: float, falling: bool = False) -> float:
+    """First time (s) ``p`` reaches ``level`` (rising, or falling), linear between samples;
+    NaN if it never does."""
+    i = np.flatnonzero(p <= level if falling else p >= level)
+    if not i.size:
+        return np.nan
+    if i[0] == 0:
+        return float(t[0])
+    j = slice(i[0] - 1, i[0] + 1)
+    return float(np.interp(level, p[j][::-1], t[j][::-1]) if falling else
+                 np.interp(level, p[j], t[j]))
 
 
 def _run(spec: PipingSpec, design: str, commanded, record: int):
     """Fill times of ``commanded`` and the trace (t s, p kPa) of actuator ``record``."""
-    sol = build(spec, design, commanded).tran(spec.t_stop, t_step=spec.t_stop / 2000)
-    return _fill_times(sol, spec, commanded), (sol.t, sol.pressure(f"act{record}"))
+    sol = build(spec, design, commanded).tran(spec.t_stop, t_step=1e-3)
+    times = np.array([crossing(sol.t, sol.pressure(f"act{k}"), spec.filled) for k in commanded])
+    return times, (sol.t, sol.pressure(f"act{record}"))
 
 
 @dataclass(repr=False)
@@ -338,5 +345,66 @@ def plot_piping(study: PipingStudy, path=None):
     ax2.set(xlim=(0, t_max if np.isfinite(t_max) else None), xlabel="time after command (s)",
             ylabel="actuator 0 pressure (kPa)")
     legend_outside(ax2, fontsize="small")
+    fig.tight_layout()
+    return save(fig, path) if path else fig
+
+
+# -- one control line ----------------------------------------------------------------------
+@dataclass(repr=False)
+class ControlLines(Summarized):
+    """How a control line delays and smooths the valve's control pressure: ``table`` (one
+    row per length: times in s after the command at the source), ``traces`` {length mm:
+    (t s, control pressure at the valve kPa, actuator pressure kPa)}."""
+
+    spec: PipingSpec
+    table: object
+    traces: dict
+
+    def _summary(self):
+        rows = [(f"{length:g} mm", number(row.ctrl_50_s, "s") + " to half")
+                for length, row in self.table.iterrows()]
+        return f"{self.spec.control.bore:g} mm bore", rows, ".table, .traces, plot_control_lines"
+
+
+def control_line_delays(spec: PipingSpec | None = None, lengths=(500.0, 1000.0, 2000.0, 4000.0)
+                        ) -> ControlLines:
+    """One actuator of the ``supply+control`` design opened through control lines of each
+    length (mm; the supply line as long): the times (s) its control pressure at the valve
+    takes to fall 10, 50 and 90 % of the way from the supply to ambient, the time the
+    actuator starts to rise (1 kPa) and its fill time."""
+    import pandas as pd
+
+    spec = replace(spec or PipingSpec(), actuators=1)
+    rows, traces = [], {}
+    hi, lo = spec.p_supply, spec.ambient
+    for length in lengths:
+        one = replace(spec, length=float(length))
+        sol = build(one, "supply+control", [0]).tran(spec.t_stop, t_step=1e-4)
+        ctl, act = sol.pressure("ctl0"), sol.pressure("act0")
+        rows.append({"length_mm": float(length),
+                     **{f"ctrl_{k}_s": crossing(sol.t, ctl, hi - k / 100 * (hi - lo), True)
+                        for k in (10, 50, 90)},
+                     "actuator_moves_s": crossing(sol.t, act, lo + 1.0),
+                     "fill_s": crossing(sol.t, act, one.filled)})
+        traces[float(length)] = (sol.t, ctl, act)
+    return ControlLines(spec, pd.DataFrame(rows).set_index("length_mm"), traces)
+
+
+def plot_control_lines(result: ControlLines, path=None):
+    """Control pressure at the valve (left) and actuator pressure (right) against time
+    after the command, one line per control-line length."""
+    from ..plotting import legend_outside, pyplot, save
+
+    fig, (ax0, ax1) = pyplot().subplots(1, 2, figsize=(11, 3.8))
+    t_max = 1.3 * float(np.nanmax(result.table["fill_s"]))
+    for length, (t, ctl, act) in result.traces.items():
+        line, = ax0.plot(t, ctl, label=f"{length / 1000:g} m")
+        ax1.plot(t, act, color=line.get_color(), label=f"{length / 1000:g} m")
+    ax0.set(xlim=(0, 0.5 * t_max), xlabel="time after command (s)",
+            ylabel="control pressure at the valve (kPa)",
+            title=f"control line {result.spec.control.bore:g} mm bore")
+    ax1.axhline(result.spec.filled, color="0.6", lw=0.8, ls=":")
+    ax1.set(xlim=(0, t_max), xlabel="time after command (s)", ylabel="actuator pressure (kPa)")
+    legend_outside(ax1, title="line length", fontsize="small")
     fig.tight_layout()
     return save(fig, path) if path else fig

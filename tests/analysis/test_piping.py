@@ -137,3 +137,19 @@ def test_command_line_prints_the_table_and_json(tmp_path, capsys):
     assert "control: tubing 3/2 mm" in capsys.readouterr().err
     assert main(["piping", "--length", "3kg"]) == 2
     assert "--length" in capsys.readouterr().err
+
+
+def test_a_longer_control_line_delays_and_smooths_the_valve():
+    """The control pressure at the valve falls later and more slowly on a longer line, and
+    the axi valve opens only once it is below a_in·p_in + a_out·p_out − p_close
+    = 0.32·496 + 0.71·96 − 96.42 = 130.4 kPa (eq. 25, actuator still at ambient)."""
+    from pneunet.analysis.piping import control_line_delays
+
+    result = control_line_delays(PipingSpec(t_stop=3.0), lengths=(500.0, 2000.0))
+    short, long_ = result.table.loc[500.0], result.table.loc[2000.0]
+    for column in ("ctrl_10_s", "ctrl_50_s", "ctrl_90_s", "actuator_moves_s", "fill_s"):
+        assert long_[column] > short[column], column
+    assert long_["ctrl_90_s"] - long_["ctrl_10_s"] > 3 * (short["ctrl_90_s"] - short["ctrl_10_s"])
+    t, ctl, act = result.traces[2000.0]
+    opens = np.flatnonzero(act > 96.0 + 1e-3)[0]
+    assert ctl[opens] == pytest.approx(130.4, abs=3.0)
