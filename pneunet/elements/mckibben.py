@@ -47,8 +47,8 @@ from .base import ElementFamily, ElementSpec, Param
 
 GRAVITY = 9.81             # m/s²
 MAGIC_ANGLE_DEG = np.degrees(np.arccos(1.0 / np.sqrt(3.0)))  # 54.7°: no force at all
-STOP_STIFFNESS = 10.0      # N/mm, end stops at no and at full contraction
-STOP_WIDTH = 0.1           # mm over which a stop engages (softplus)
+STOP_STIFFNESS = 1000.0    # N/mm, end stops at no and full contraction (damped: see parts)
+STOP_WIDTH = 0.01          # mm over which a stop engages (softplus)
 VELOCITY_SCALE = 100.0     # mm/s per kPa of the velocity node
 
 
@@ -152,14 +152,21 @@ class _Muscle(ElementFamily):
         per_kpa = self._c * (3.0 * eff ** 2 - self._b2)
         return (p - self._amb) * per_kpa, per_kpa, -6.0 * self._c * self._k * eff * (p - self._amb)
 
-    def net_force(self, p, x):
-        """G (N), ∂G/∂p, ∂G/∂x, ∂²G/∂x² and ∂²G/∂p∂x (see module)."""
+    def stops(self, x):
+        """Force of the end stops (N, towards contraction), its first and second
+        derivatives by x, their engagement e ∈ [0, 1] and de/dx."""
         w = STOP_WIDTH
         low, high = -x / w, (x - self._x_max) / w
         s_low, s_high = expit(low), expit(high)
-        stops = STOP_STIFFNESS * w * (np.logaddexp(0.0, low) - np.logaddexp(0.0, high))
-        d_stops = -STOP_STIFFNESS * (s_low + s_high)
-        dd_stops = STOP_STIFFNESS / w * (s_low * (1 - s_low) - s_high * (1 - s_high))
+        slope_low, slope_high = s_low * (1 - s_low) / w, s_high * (1 - s_high) / w
+        force = STOP_STIFFNESS * w * (np.logaddexp(0.0, low) - np.logaddexp(0.0, high))
+        return (force, -STOP_STIFFNESS * (s_low + s_high),
+                STOP_STIFFNESS * (slope_low - slope_high), s_low + s_high,
+                slope_high - slope_low)
+
+    def net_force(self, p, x):
+        """G (N), ∂G/∂p, ∂G/∂x, ∂²G/∂x² and ∂²G/∂p∂x (see module)."""
+        stops, d_stops, dd_stops, _, _ = self.stops(x)
         f, f_p, f_x = self.tension(p, x)
         g_x = f_x - self._spring + d_stops
         g_xx = 6.0 * self._c * self._k ** 2 * (p - self._amb) + dd_stops
@@ -292,27 +299,34 @@ class DampedMcKibben(_Muscle):
 
 @register
 class InertialMcKibben(_Muscle):
-    """Mass m: ẋ = v at ``NAME.x``, m·v̇ = G(p, x) − c·v at ``NAME.v``."""
+    """Mass m: ẋ = v at ``NAME.x``, m·v̇ = G(p, x) − (c + e·c_stop)·v at ``NAME.v``, the
+    stops (engaged by e) critically damped: c_stop = 2·√(STOP_STIFFNESS·m)."""
 
     kind = "mckibben_inertial"
     ports = ("a", "x", "v")
     storage_ports = (0, 1, 2)
 
+    def __init__(self, specs, context):
+        super().__init__(specs, context)
+        self._stop_damp = 2.0 * np.sqrt(STOP_STIFFNESS * self._mass)  # N·s/mm
+
     def _terms(self, p, pdot, partials):
         pa, x = p[..., 0], self._contraction(p[..., 1])
         vel = VELOCITY_SCALE * (p[..., 2] - self._amb)              # mm/s
         g, g_p, g_x, _, _ = self.net_force(pa, x)
+        _, _, _, engaged, d_engaged = self.stops(x)
+        damp = self._damp + engaged * self._stop_damp
         q, dq = self._gas(pa, x, pdot[..., 0], pdot[..., 1], partials)
         accel = VELOCITY_SCALE * pdot[..., 2]                       # mm/s²
-        out = np.stack([q, pdot[..., 1] - vel,
-                        self._mass * accel + self._damp * vel - g], axis=-1)
+        out = np.stack([q, pdot[..., 1] - vel, self._mass * accel + damp * vel - g], axis=-1)
         if not partials:
             return out, None, None
         d_p = np.zeros((self.n, 3, 3))
         d_p[:, 0, 0], d_p[:, 0, 1] = dq[0], dq[1]
         d_p[:, 1, 2] = -VELOCITY_SCALE
-        d_p[:, 2, 0], d_p[:, 2, 1] = -g_p, -g_x
-        d_p[:, 2, 2] = self._damp * VELOCITY_SCALE
+        d_p[:, 2, 0] = -g_p
+        d_p[:, 2, 1] = d_engaged * self._stop_damp * vel - g_x
+        d_p[:, 2, 2] = damp * VELOCITY_SCALE
         d_pdot = np.zeros((self.n, 3, 3))
         d_pdot[:, 0, 0], d_pdot[:, 0, 1] = dq[2], dq[3]
         d_pdot[:, 1, 1] = 1.0
