@@ -155,3 +155,28 @@ def test_netlist_signals_and_round_trip():
     assert {"contraction_M1", "force_M1", "volume_M1"} <= set(sol.signals)
     assert not any(k.startswith("p_M1") for k in sol.signals)
     assert sol.units["contraction_M1"] == "mm" and sol.units["force_M1"] == "N"
+
+
+def test_fig12_netlist_oscillates_between_the_turning_points(tmp_path):
+    """The paper's Fig. 12: the tank pressure cycles between the stationary-branch
+    turning points of the valve + R_out subsystem, and the muscle contracts with it."""
+    from pathlib import Path
+
+    from pneunet.analysis.branches import spec_from_circuit, stationary_branches
+    from pneunet.analysis.muscle import muscle_cycle, plot_muscle_run
+    from pneunet.netlist import parse_file
+
+    deck = parse_file(Path(__file__).resolve().parents[2] / "netlists" / "fig12_mckibben.pn")
+    sol = deck.circuit.tran(50.0)
+    branches = stationary_branches(spec_from_circuit(deck.circuit))
+    cycle = muscle_cycle(sol, "M1", "tank")
+    p, x = cycle.pressure, cycle.contraction
+    assert p.kind == "limit_cycle" and p.cycles >= 3
+    assert p.p_min == pytest.approx(branches.p_c_min, abs=0.5)
+    assert p.p_max == pytest.approx(branches.p_c_max, abs=0.5)
+    assert x.kind == "limit_cycle" and x.period_s == pytest.approx(p.period_s, rel=0.01)
+    assert cycle.amplitude_mm > 1.0
+    # more pressure, more contraction: the two move together
+    after = sol.t >= 10.0
+    assert np.corrcoef(sol.pressure("tank")[after], sol["contraction_M1"][after])[0, 1] > 0.9
+    assert plot_muscle_run(sol, "M1", ("tank", "out"), tmp_path / "f.png").stat().st_size > 10_000
