@@ -114,8 +114,19 @@ def tornado():
         yield_analysis(problem, values, spread, n=40, seed=0).plot_tornado(OUT / "tornado.png")
 
 
+def soft_robot():
+    """``pneunet piping --plot`` / ``plot_piping`` (the paper's Fig. 1B arm, N = 4) and
+    ``plot_control_lines`` (docs/soft-robot.md)."""
+    from pneunet.analysis.piping import (control_line_delays, piping_study, plot_control_lines,
+                                         plot_piping)
+
+    plot_piping(piping_study(), OUT / "piping.png")
+    plot_control_lines(control_line_delays(lengths=(500, 1000, 2000, 4000, 8000)),
+                       OUT / "control_lines.png")
+
+
 FIGURES = {f.__name__: f for f in (solution, sweep, branches, design, identify, diagnose,
-                                   traces, tornado)}
+                                   traces, tornado, soft_robot)}
 
 if __name__ == "__main__":
     OUT.mkdir(parents=True, exist_ok=True)
