@@ -32,11 +32,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass, field, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..errors import ParameterError
 from ..reprs import Summarized, number
+
+if TYPE_CHECKING:
+    from ..engine.circuit import Circuit
 
 DESIGNS = ("individual", "supply+control", "demux")
 INVERTER_PULL_DOWN = 20.0   # kPa·s/mg, as in netlists/demux3.pn
@@ -131,7 +135,7 @@ def _idle(circuit, prefix: str, end: str, pressure: float, initial: dict) -> Non
     initial.update({node: pressure for node in circuit.nodes if node.startswith(prefix + ".")})
 
 
-def build(spec: PipingSpec, design: str, commanded) -> "Circuit":
+def build(spec: PipingSpec, design: str, commanded) -> Circuit:
     """The circuit of a design with the actuators in ``commanded`` switched on at t = 0
     (nodes ``act0`` … ``act{N-1}``); ``demux`` takes one actuator."""
     from ..engine.circuit import Circuit

@@ -71,7 +71,8 @@ def main(args) -> int:
           f"supply {spec.p_supply:g} kPa, filled at {spec.filled:g} kPa")
     table = study.table.rename(columns={
         "outer_mm2": "outer mm2", "saving_outer_pct": "saving %", "bore_mm2": "bore mm2",
-        "saving_bore_pct": "bore saving %", "fill_alone_s": "fill one s", "fill_all_s": "fill all s"})
+        "saving_bore_pct": "bore saving %", "fill_alone_s": "fill one s",
+        "fill_all_s": "fill all s"})
     print(table.to_string(float_format=lambda x: f"{x:.3g}"))
     if "plot" in out:
         print(f"plot: {out['plot']}")
