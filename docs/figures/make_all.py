@@ -125,8 +125,18 @@ def soft_robot():
                        OUT / "control_lines.png")
 
 
+def mckibben():
+    """``plot_muscle_run``: the paper's Fig. 12 run (netlists/fig12_mckibben.pn, 50 s)."""
+    from pneunet.analysis.muscle import plot_muscle_run
+    from pneunet.netlist import parse_file
+
+    sol = parse_file(ROOT / "netlists" / "fig12_mckibben.pn").circuit.tran(50.0, t_step=0.01)
+    plot_muscle_run(sol, "M1", ("tank", "out"), OUT / "fig12_mckibben.png",
+                    title="Fig. 12: oscillator driving a 53 cm McKibben lifting 200 g")
+
+
 FIGURES = {f.__name__: f for f in (solution, sweep, branches, design, identify, diagnose,
-                                   traces, tornado, soft_robot)}
+                                   traces, tornado, soft_robot, mckibben)}
 
 if __name__ == "__main__":
     OUT.mkdir(parents=True, exist_ok=True)

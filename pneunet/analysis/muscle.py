@@ -46,21 +46,27 @@ def muscle_cycle(sol, muscle: str, node: str, *, settle: float = 10.0,
                                            min_amplitude=min_swing_mm))
 
 
-def plot_muscle_run(sol, muscle: str, nodes=("tank",), path=None, title=None):
-    """Pressures of ``nodes`` (kPa, top) and the muscle's contraction (mm, bottom)
-    against time, as the paper's Fig. 12B; saves a PNG at ``path`` or returns the figure."""
+def plot_muscle_run(sol, muscle: str, nodes=("tank",), path=None, title=None,
+                    settle: float = 10.0):
+    """Pressures of ``nodes`` (kPa, top), the muscle's contraction (mm, middle) and the
+    contraction after ``settle`` s drawn at its own scale (bottom) against time, as the
+    paper's Fig. 12B; saves a PNG at ``path`` or returns the figure."""
     from ..plotting import draw_traces, legend_outside, pyplot, save
 
     plt = pyplot()
-    fig, (top, bottom) = plt.subplots(2, 1, sharex=True, figsize=(8, 5.5),
-                                      gridspec_kw={"height_ratios": [3, 2]})
+    fig, (top, middle, bottom) = plt.subplots(3, 1, sharex=True, figsize=(8, 7),
+                                              gridspec_kw={"height_ratios": [3, 2, 2]})
     draw_traces(top, sol.t, {f"p({n})": sol.pressure(n) for n in nodes},
                 "pressure (kPa abs)")
     x = np.asarray(sol[f"contraction_{muscle}"])
-    bottom.plot(sol.t, x, color="tab:red", label=f"contraction({muscle})")
-    bottom.set_ylabel("contraction (mm)")
+    later = sol.t >= settle
+    for ax, label in ((middle, f"contraction({muscle})"),
+                      (bottom, f"contraction({muscle}) after {settle:g} s")):
+        ax.plot(sol.t if ax is middle else sol.t[later], x if ax is middle else x[later],
+                color="tab:red", label=label)
+        ax.set_ylabel("contraction (mm)")
+        legend_outside(ax, fontsize="small")
     bottom.set_xlabel("time (s)")
-    legend_outside(bottom, fontsize="small")
     if title:
         fig.suptitle(title)
     return save(fig, path) if path is not None else fig
