@@ -1,7 +1,10 @@
 """Piping footprint of a soft robot (paper Fig. 1B): tubing cross-section and fill times.
 
 A robot of N actuators (each a volume, mL) sits at the end of tubes of length L (mm) from
-its pressure source.  Three designs are compared, every valve the same membrane valve
+its pressure source; actuator k sits ``positions[k]`` mm further along the robot (default:
+all at its base), so its lines are L + positions[k] long.  Shared lines (the supply, the
+address lines and, from the inverters at the nearest actuator on, their complements) run
+along the robot with a tap at each actuator.  Three designs are compared, every valve the same membrane valve
 (normally open: a control pressure at the supply closes it, ambient opens it):
 
 ``individual``
@@ -15,12 +18,12 @@ its pressure source.  Three designs are compared, every valve the same membrane 
     from the supply, pull-down 20 kPa·s/mg, 2 mL), per actuator a chain of ⌈log₂ N⌉ valves
     (0.5 mL between them) that passes only when the address is the actuator's number.
 
-Footprint: the sum of π/4·D² over all lines, by outer diameter (what the tubing occupies)
+Footprint: the sum of π/4·D² over the lines that leave the source, by outer diameter (what the tubing occupies)
 and by bore (mm²).  Fill time: from the command at the source (t = 0) to the actuator's
 pressure reaching ``level`` of the supply's gauge pressure, simulated with every line a
 ``tube`` element (laminar/Blasius, its own volume), from the idle state: supply line at
 the supply pressure, control lines at the level that holds the valves closed, actuators at
-ambient.  "alone": one actuator commanded; "all": every actuator commanded at once
+ambient.  "alone": each actuator commanded by itself; "all": every actuator commanded at once
 (``demux``: one at a time, so the sum of the single fill times).  Nothing is scaled: the
 designs differ only in their tubes and where the valves sit.
 
@@ -74,6 +77,7 @@ class PipingSpec:
 
     actuators: int = 4
     length: float = 1000.0                          # mm, source to robot, every line
+    positions: tuple = ()                           # mm along the robot (() : all at 0)
     volume: float = 50.0                            # mL per actuator
     power: Tubing = Tubing(2.5, 4.0)                # individual lines
     control: Tubing = Tubing(1.2, 3.0)              # control and address lines
@@ -95,6 +99,15 @@ class PipingSpec:
                 raise ParameterError(f"piping: {name}={getattr(self, name)!r} must be {rule}")
         if self.supply is None:
             object.__setattr__(self, "supply", self.power)
+        positions = tuple(float(x) for x in self.positions)
+        if positions and (len(positions) != self.actuators or min(positions) < 0):
+            raise ParameterError(f"piping: positions={self.positions!r} must give one distance "
+                                 f">= 0 mm per actuator ({self.actuators})")
+        object.__setattr__(self, "positions", positions)
+
+    def distance(self, k: int) -> float:
+        """Tube length (mm) from the source to actuator ``k``."""
+        return self.length + (self.positions[k] if self.positions else 0.0)
 
     @property
     def bits(self) -> int:
@@ -135,6 +148,20 @@ def _idle(circuit, prefix: str, end: str, pressure: float, initial: dict) -> Non
     initial.update({node: pressure for node in circuit.nodes if node.startswith(prefix + ".")})
 
 
+def _trunk(c, name: str, start: str, start_at: float, stops, bore: float, idle: float,
+           initial: dict) -> dict:
+    """A shared line from node ``start`` (``start_at`` mm from the source) with a tap at
+    each distance in ``stops`` (mm): tubes ``{name}{j}`` between taps ``{name}_{j}``, idle
+    at ``idle`` kPa.  Returns {distance: tap node}."""
+    taps, node, at = {start_at: start}, start, start_at
+    for j, distance in enumerate(sorted(set(stops) - {start_at})):
+        tap = f"{name}_{j}"
+        c.tube(f"{name}{j}", node, tap, length=distance - at, diameter=bore)
+        _idle(c, f"{name}{j}", tap, idle, initial)
+        taps[distance], node, at = tap, tap, distance
+    return taps
+
+
 def build(spec: PipingSpec, design: str, commanded) -> Circuit:
     """The circuit of a design with the actuators in ``commanded`` switched on at t = 0
     (nodes ``act0`` … ``act{N-1}``); ``demux`` takes one actuator."""
@@ -150,52 +177,62 @@ def build(spec: PipingSpec, design: str, commanded) -> Circuit:
         for k in range(spec.actuators):
             c.pressure_source(f"PC{k}", f"c{k}", Step(hi, lo) if k in commanded else hi)
             c.valve(f"X{k}", "source", f"v{k}", f"c{k}", model=spec.valve)
-            c.tube(f"T{k}", f"v{k}", f"act{k}", length=spec.length, diameter=spec.power.bore)
+            c.tube(f"T{k}", f"v{k}", f"act{k}", length=spec.distance(k),
+                   diameter=spec.power.bore)
             c.volume(f"A{k}", f"act{k}", V=spec.volume)
         return c
-    c.tube("TS", "source", "robot", length=spec.length, diameter=spec.supply.bore)
-    _idle(c, "TS", "robot", hi, initial)
+    distances = [spec.distance(k) for k in range(spec.actuators)]
+    supply = _trunk(c, "TS", "source", 0.0, distances, spec.supply.bore, hi, initial)
     if design == "supply+control":
         for k in range(spec.actuators):
             c.pressure_source(f"PC{k}", f"c{k}", Step(hi, lo) if k in commanded else hi)
-            c.tube(f"TC{k}", f"c{k}", f"ctl{k}", length=spec.length, diameter=spec.control.bore)
+            c.tube(f"TC{k}", f"c{k}", f"ctl{k}", length=distances[k],
+                   diameter=spec.control.bore)
             _idle(c, f"TC{k}", f"ctl{k}", hi, initial)
-            c.valve(f"X{k}", "robot", f"act{k}", f"ctl{k}", model=spec.valve)
+            c.valve(f"X{k}", supply[distances[k]], f"act{k}", f"ctl{k}", model=spec.valve)
             c.volume(f"A{k}", f"act{k}", V=spec.volume)
     else:
         if len(commanded) != 1:
             raise ParameterError("a demultiplexer fills one actuator at a time")
-        _demux(c, spec, commanded.pop(), initial)
+        _demux(c, spec, commanded.pop(), supply, initial)
     for node, pressure in initial.items():
         c.set_initial(node, pressure)
     return c
 
 
-def _demux(c, spec: PipingSpec, target: int, initial: dict) -> None:
+def _demux(c, spec: PipingSpec, target: int, supply: dict, initial: dict) -> None:
     """Address lines, inverters and valve chains of the ``demux`` design; the address
     switches at t = 0 from the complement of ``target`` (every line changes) to ``target``.
-    Line a0_i is low when bit i is 0, its inverted copy a1_i low when bit i is 1."""
+    Line a0_i is low when bit i is 0, its inverted copy a1_i (from an inverter at the
+    nearest actuator) low when bit i is 1.  ``supply``: the supply line's taps."""
     from ..waveforms import Step
 
     lo, hi, bits = spec.ambient, spec.p_supply, spec.bits
     before = (2 ** bits - 1) ^ target
+    distances = [spec.distance(k) for k in range(spec.actuators)]
+    near = min(distances)
 
     def bit(x, i):
         return (x >> i) & 1
+    lines = {}
     for i in range(bits):
         was, now = (hi, lo) if bit(before, i) else (lo, hi)
         c.pressure_source(f"PA{i}", f"s{i}", Step(was, now))
-        c.tube(f"TA{i}", f"s{i}", f"a0_{i}", length=spec.length, diameter=spec.control.bore)
-        _idle(c, f"TA{i}", f"a0_{i}", was, initial)
-        c.valve(f"XI{i}", "robot", f"a1_{i}", f"a0_{i}", model=spec.valve)
+        a0 = _trunk(c, f"TA{i}", f"s{i}", 0.0, distances, spec.control.bore, was, initial)
+        inverted = lo if was == hi else hi
+        a1 = _trunk(c, f"TB{i}", f"a1_{i}", near, distances, spec.control.bore, inverted,
+                    initial)
+        c.valve(f"XI{i}", supply[near], f"a1_{i}", a0[near], model=spec.valve)
         c.resistor(f"RI{i}", f"a1_{i}", "atm", R=INVERTER_PULL_DOWN)
         c.volume(f"VI{i}", f"a1_{i}", V=INVERTER_VOLUME)
-        initial[f"a1_{i}"] = lo if was == hi else hi
+        initial[f"a1_{i}"] = inverted
+        lines[0, i], lines[1, i] = a0, a1
     for k in range(spec.actuators):
-        node, passing = "robot", True
+        node, passing = supply[distances[k]], True
         for i in range(bits):
             after = f"act{k}" if i == bits - 1 else f"n{k}_{i}"
-            c.valve(f"X{k}_{i}", node, after, f"a{bit(k, i)}_{i}", model=spec.valve)
+            c.valve(f"X{k}_{i}", node, after, lines[bit(k, i), i][distances[k]],
+                    model=spec.valve)
             if i < bits - 1:
                 c.volume(f"VN{k}_{i}", after, V=CHAIN_VOLUME)
             passing = passing and bit(k, i) == bit(before, i)
@@ -246,14 +283,14 @@ class DesignResult(Summarized):
 def evaluate(spec: PipingSpec, design: str) -> DesignResult:
     """Cross-sections and simulated fill times of one design (see module doc)."""
     n = spec.actuators
+    alike = design != "demux" and len(set(spec.positions)) <= 1  # one run stands for all
+    runs = [_run(spec, design, [k], k) for k in range(1 if alike else n)]
+    alone = np.array([r[0][0] for r in runs] * (n if alike else 1))
+    trace = runs[0][1]
     if design == "demux":
-        runs = [_run(spec, design, [k], k) for k in range(n)]
-        alone = np.array([r[0][0] for r in runs])
-        trace, total = runs[0][1], float(alone.sum())
-    else:  # actuators are alike: one commanded alone, then all at once
-        first, trace = _run(spec, design, [0], 0)
-        alone = np.full(n, first[0])
-        total = float(np.max(_run(spec, design, range(n), 0)[0])) if n > 1 else float(first[0])
+        total = float(alone.sum())
+    else:
+        total = float(np.max(_run(spec, design, range(n), 0)[0])) if n > 1 else float(alone[0])
     return DesignResult(design, [(r, k, asdict(t)) for r, k, t in lines(spec, design)],
                         cross_section(spec, design, "outer"), cross_section(spec, design, "bore"),
                         alone, total, trace)
@@ -274,7 +311,7 @@ class PipingStudy(Summarized):
     @property
     def table(self):
         """One row per design: lines, cross-sections and saving against ``individual``
-        (%), fill times (s) of one actuator alone (slowest) and of all."""
+        (%), fill times (s) of the fastest and the slowest actuator alone, and of all."""
         import pandas as pd
 
         base = {w: cross_section(self.spec, "individual", w) for w in ("outer", "bore")}
@@ -282,7 +319,8 @@ class PipingStudy(Summarized):
             "design": d, "lines": sum(k for _, k, _ in r.lines),
             "outer_mm2": r.outer_mm2, "saving_outer_pct": 100 * (1 - r.outer_mm2 / base["outer"]),
             "bore_mm2": r.bore_mm2, "saving_bore_pct": 100 * (1 - r.bore_mm2 / base["bore"]),
-            "fill_alone_s": float(np.nanmax(r.alone_s)), "fill_all_s": r.all_s,
+            "fill_alone_min_s": float(np.nanmin(r.alone_s)),
+            "fill_alone_max_s": float(np.nanmax(r.alone_s)), "fill_all_s": r.all_s,
         } for d, r in self.results.items()]).set_index("design")
 
     def as_dict(self) -> dict:
@@ -336,7 +374,10 @@ def plot_piping(study: PipingStudy, path=None):
                      ha="center", fontsize="small", color="white")
     ax0.set(ylabel="tubing cross-section (mm²)", title=f"N = {study.spec.actuators} actuators")
     ax0.legend(frameon=False, fontsize="small")
-    ax1.bar(x - 0.2, table["fill_alone_s"], 0.4, label="one actuator")
+    ax1.bar(x - 0.2, table["fill_alone_max_s"], 0.4, label="one actuator (slowest)")
+    ax1.errorbar(x - 0.2, table["fill_alone_max_s"],
+                 yerr=[table["fill_alone_max_s"] - table["fill_alone_min_s"], 0 * x],
+                 fmt="none", ecolor="k", capsize=3, label="… to the fastest")
     ax1.bar(x + 0.2, table["fill_all_s"], 0.4, label="all (demux: in turn)")
     ax1.set(ylabel=f"fill time to {100 * study.spec.level:.0f} % (s)")
     ax1.legend(frameon=False, fontsize="small")
@@ -345,7 +386,7 @@ def plot_piping(study: PipingStudy, path=None):
     for name, r in study.results.items():
         ax2.plot(r.trace[0], r.trace[1], label=name)
     ax2.axhline(study.spec.filled, color="0.6", lw=0.8, ls=":")
-    t_max = 1.5 * max(float(np.nanmax(r.alone_s)) for r in study.results.values())
+    t_max = 1.5 * max(float(r.alone_s[0]) for r in study.results.values())
     ax2.set(xlim=(0, t_max if np.isfinite(t_max) else None), xlabel="time after command (s)",
             ylabel="actuator 0 pressure (kPa)")
     legend_outside(ax2, fontsize="small")

@@ -18,6 +18,9 @@ def register(subparsers) -> None:
                     "Example: pneunet piping --actuators 8 --length 1m --plot piping.png")
     p.add_argument("--actuators", "-n", type=int, default=4, help="number of actuators (4)")
     p.add_argument("--length", default="1m", help="tube length source to robot (1m)")
+    p.add_argument("--spacing", default="0mm",
+                   help="distance between neighbouring actuators along the robot (0mm: all "
+                        "at its base)")
     p.add_argument("--volume", default="50mL", help="volume of each actuator (50mL)")
     p.add_argument("--power", default="2.5/4", metavar="BORE/OUTER",
                    help="individual power lines, mm (2.5/4)")
@@ -52,7 +55,9 @@ def _quantity(text: str, slot: str, what: str) -> float:
 def main(args) -> int:
     from ..analysis.piping import PipingSpec, piping_study, plot_piping, with_sizes
 
+    spacing = _quantity(args.spacing, "length", "spacing")
     spec = PipingSpec(actuators=args.actuators, length=_quantity(args.length, "length", "length"),
+                      positions=tuple(k * spacing for k in range(max(args.actuators, 0))),
                       volume=_quantity(args.volume, "volume", "volume"), valve=args.valve,
                       p_supply=_quantity(args.pH, "pressure", "pH"),
                       ambient=_quantity(args.pL, "pressure", "pL"), level=args.level)
@@ -67,12 +72,13 @@ def main(args) -> int:
     if args.json:
         print(json.dumps(out, indent=1, default=float))
         return 0
-    print(f"{spec.actuators} actuators of {spec.volume:g} mL, {spec.length:g} mm of tubing, "
-          f"supply {spec.p_supply:g} kPa, filled at {spec.filled:g} kPa")
+    along = f" (+ {spacing:g} mm per actuator along the robot)" if spacing else ""
+    print(f"{spec.actuators} actuators of {spec.volume:g} mL, {spec.length:g} mm of tubing"
+          f"{along}, supply {spec.p_supply:g} kPa, filled at {spec.filled:g} kPa")
     table = study.table.rename(columns={
         "outer_mm2": "outer mm2", "saving_outer_pct": "saving %", "bore_mm2": "bore mm2",
-        "saving_bore_pct": "bore saving %", "fill_alone_s": "fill one s",
-        "fill_all_s": "fill all s"})
+        "saving_bore_pct": "bore saving %", "fill_alone_min_s": "one: fastest s",
+        "fill_alone_max_s": "slowest s", "fill_all_s": "all s"})
     print(table.to_string(float_format=lambda x: f"{x:.3g}"))
     if "plot" in out:
         print(f"plot: {out['plot']}")

@@ -112,6 +112,7 @@ def test_one_power_line_fills_as_a_finite_volume_line_behind_the_valve():
     (lambda: PipingSpec(actuators=0), "actuators=0"),
     (lambda: PipingSpec(length=-1.0), "length=-1.0"),
     (lambda: PipingSpec(level=1.2), "level=1.2"),
+    (lambda: PipingSpec(actuators=3, positions=(0, 100)), "one distance >= 0 mm per actuator"),
     (lambda: Tubing(3.0, 2.0), "bore must be"),
     (lambda: piping_study(PipingSpec(actuators=1), ["demux"]), "at least 2 actuators"),
     (lambda: piping_study(PipingSpec(), ["star"]), "unknown piping design 'star'"),
@@ -133,6 +134,8 @@ def test_command_line_prints_the_table_and_json(tmp_path, capsys):
     assert main(["piping", "-n", "2", "--designs", "individual", "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     assert data["spec"]["actuators"] == 2 and len(data["fill_alone_s"]["individual"]) == 2
+    assert main(["piping", "-n", "2", "--spacing", "20cm", "--designs", "individual"]) == 0
+    assert "+ 200 mm per actuator" in capsys.readouterr().out
     assert main(["piping", "--control", "3/2"]) == 2
     assert "control: tubing 3/2 mm" in capsys.readouterr().err
     assert main(["piping", "--length", "3kg"]) == 2
@@ -153,3 +156,20 @@ def test_a_longer_control_line_delays_and_smooths_the_valve():
     t, ctl, act = result.traces[2000.0]
     opens = np.flatnonzero(act > 96.0 + 1e-3)[0]
     assert ctl[opens] == pytest.approx(130.4, abs=3.0)
+
+
+def test_actuators_along_the_robot_fill_in_the_order_of_their_distance():
+    """Actuators 0, 200, 400 mm along the robot: their own lines are 1.0, 1.2, 1.4 m; the
+    shared lines run along the robot with a tap at each actuator."""
+    spec = PipingSpec(actuators=3, positions=(0.0, 200.0, 400.0))
+    c = build(spec, "supply+control", [0])
+    lengths = {name: sum(e.params["length"] for n, e in c.elements.items()
+                         if n.startswith(name + ".")) for name in ("TS0", "TS1", "TC2")}
+    assert lengths == pytest.approx({"TS0": 1000.0, "TS1": 200.0, "TC2": 1400.0})
+    demux = build(spec, "demux", [2])   # address lines and their complements tapped too
+    assert {"TA0_0", "TA0_2", "TB1_1", "a1_1"} <= set(demux.nodes)
+    study = piping_study(spec)
+    for design in ("individual", "supply+control"):
+        assert np.all(np.diff(study.results[design].alone_s) > 0), design
+    assert study.table.loc["individual", "fill_alone_max_s"] > piping_study(
+        PipingSpec(actuators=3), ["individual"]).table.loc["individual", "fill_alone_max_s"]
