@@ -48,7 +48,7 @@ from .base import ElementFamily, ElementSpec, Param
 GRAVITY = 9.81             # m/s²
 MAGIC_ANGLE_DEG = np.degrees(np.arccos(1.0 / np.sqrt(3.0)))  # 54.7°: no force at all
 STOP_STIFFNESS = 1000.0    # N/mm, end stops at no and full contraction (damped: see parts)
-STOP_WIDTH = 0.01          # mm over which a stop engages (softplus)
+STOP_WIDTH = 0.03          # mm over which a stop engages (softplus)
 VELOCITY_SCALE = 100.0     # mm/s per kPa of the velocity node
 
 
@@ -66,8 +66,9 @@ def geometry(params: dict) -> tuple[float, float]:
     return b, b * np.sin(theta) / (np.pi * params["D0"])
 
 
-def _check_geometry(spec: ElementSpec) -> None:
-    """One of (D0, theta0) or (b, n), a braid that can contract: else ParameterError."""
+def _check(spec: ElementSpec) -> None:
+    """One of (D0, theta0) or (b, n), a braid that can contract, a muscle that is not
+    slack: else ParameterError."""
     p = spec.params
     by_angle = not (np.isnan(p["D0"]) or np.isnan(p["theta0"]))
     by_thread = not (np.isnan(p["b"]) or np.isnan(p["n"]))
@@ -87,6 +88,11 @@ def _check_geometry(spec: ElementSpec) -> None:
             f"thread length b={p['b']:g} mm cannot be wound on L0={p['L0']:g} mm: cos θ0 = "
             f"L0/b = {p['L0'] / p['b']:.3g} must lie in (1/√3, 1)", where=spec.where,
             hint="b > L0 (the thread is longer than the muscle) and b < √3·L0 (θ0 < 54.7°)")
+    if _part_kind(p) == "mckibben_static" and p["spring"] == 0 and p["preload"] == 0:
+        raise ParameterError("a mckibben with no mass, damping, spring or preload is slack: "
+                             "at ambient pressure any length balances, so none is defined",
+                             where=spec.where, hint="hang a mass (mass=200g), or give a "
+                                                    "spring, a preload or damping")
 
 
 _PARAMS = {
@@ -119,7 +125,7 @@ class _Muscle(ElementFamily):
 
     @classmethod
     def check_spec(cls, spec):
-        _check_geometry(spec)
+        _check(spec)
         wanted = _part_kind(spec.params)
         if cls.kind != wanted:
             raise ParameterError(f"{cls.kind} does not fit this load (it is a {wanted})",
@@ -140,17 +146,40 @@ class _Muscle(ElementFamily):
         self._rho1 = context.gas.capacitance(1.0, opts.temperature)  # mg/(kPa·mL)
 
     # -- laws of one state (x mm, p kPa), arrays of any shape ending in n -------------
+    def held(self, x):
+        """x held smoothly within [0, x_max] (softplus over STOP_WIDTH; beyond the stops
+        the laws stay at their ends) and its first two derivatives."""
+        w = STOP_WIDTH
+        above, s_above = w * np.logaddexp(0.0, x / w), expit(x / w)        # ≈ max(x, 0)
+        u = (self._x_max - above) / w
+        s_below = expit(u)
+        held = self._x_max - w * np.logaddexp(0.0, u)                       # ≈ min(·, x_max)
+        slope = s_below * s_above
+        bend = (s_below * s_above * (1 - s_above)
+                - s_above ** 2 * s_below * (1 - s_below)) / w
+        return held, slope, bend
+
     def volume(self, x):
         """V (mL), dV/dx (mL/mm) and d²V/dx² at contraction x (mm)."""
-        length = self._l0 - x
-        return (self._c * length * (self._b2 - length ** 2),
-                self._c * (3.0 * length ** 2 - self._b2), -6.0 * self._c * length)
+        held, slope, bend = self.held(x)
+        length = self._l0 - held
+        v_h = self._c * (3.0 * length ** 2 - self._b2)
+        return (self._c * length * (self._b2 - length ** 2), v_h * slope,
+                -6.0 * self._c * length * slope ** 2 + v_h * bend)
+
+    def _per_kpa(self, x):
+        """F/p_g (N/kPa; Tondu–Lopez at k_end, Chou–Hannaford at 1) and its first two
+        derivatives by x."""
+        held, slope, bend = self.held(x)
+        eff = self._l0 - self._k * held
+        f, f_h, f_hh = (self._c * (3.0 * eff ** 2 - self._b2), -6.0 * self._c * self._k * eff,
+                        6.0 * self._c * self._k ** 2)
+        return f, f_h * slope, f_hh * slope ** 2 + f_h * bend
 
     def tension(self, p, x):
-        """F (N) and ∂F/∂p, ∂F/∂x (Tondu–Lopez at k_end, Chou–Hannaford at 1)."""
-        eff = self._l0 - self._k * x
-        per_kpa = self._c * (3.0 * eff ** 2 - self._b2)
-        return (p - self._amb) * per_kpa, per_kpa, -6.0 * self._c * self._k * eff * (p - self._amb)
+        """F (N), ∂F/∂p and ∂F/∂x."""
+        f, f_x, _ = self._per_kpa(x)
+        return (p - self._amb) * f, f, (p - self._amb) * f_x
 
     def stops(self, x):
         """Force of the end stops (N, towards contraction), its first and second
@@ -167,11 +196,10 @@ class _Muscle(ElementFamily):
     def net_force(self, p, x):
         """G (N), ∂G/∂p, ∂G/∂x, ∂²G/∂x² and ∂²G/∂p∂x (see module)."""
         stops, d_stops, dd_stops, _, _ = self.stops(x)
-        f, f_p, f_x = self.tension(p, x)
-        g_x = f_x - self._spring + d_stops
-        g_xx = 6.0 * self._c * self._k ** 2 * (p - self._amb) + dd_stops
-        g_px = -6.0 * self._c * self._k * (self._l0 - self._k * x)
-        return f - self._load - self._spring * x + stops, f_p, g_x, g_xx, g_px
+        f, f_x, f_xx = self._per_kpa(x)
+        gauge = p - self._amb
+        return (gauge * f - self._load - self._spring * x + stops, f,
+                gauge * f_x - self._spring + d_stops, gauge * f_xx + dd_stops, f_x)
 
     def _contraction(self, z):
         return z - self._amb
@@ -232,7 +260,7 @@ class McKibben(ElementFamily):
 
     @classmethod
     def check_spec(cls, spec):
-        _check_geometry(spec)
+        _check(spec)
 
     @classmethod
     def expand(cls, spec):
@@ -245,7 +273,7 @@ class McKibben(ElementFamily):
 
 @register
 class StaticMcKibben(_Muscle):
-    """No mass, no damping: the force balance G(p, x) = 0 at ``NAME.x`` is algebraic."""
+    """No mass, no damping: the force balance −G(p, x) = 0 at ``NAME.x`` is algebraic."""
 
     kind = "mckibben_static"
     ports = ("a", "x")
@@ -257,7 +285,7 @@ class StaticMcKibben(_Muscle):
         g, g_p, g_x, g_xx, g_px = self.net_force(pa, x)
         rate = -g_p / g_x                                  # dx/dp on the balance, mm/kPa
         q, dq = self._gas(pa, x, pa_dot, rate * pa_dot, partials)
-        out = np.stack([q, g], axis=-1)
+        out = np.stack([q, -g], axis=-1)  # −G rises with x, as a flow with its pressure
         if not partials:
             return out, None, None
         dq_dp, dq_dx, dq_dpd, dq_dxd = dq
@@ -266,7 +294,7 @@ class StaticMcKibben(_Muscle):
         d_p = np.zeros((self.n, 2, 2))
         d_p[:, 0, 0] = dq_dp + dq_dxd * rate_p * pa_dot
         d_p[:, 0, 1] = dq_dx + dq_dxd * rate_x * pa_dot
-        d_p[:, 1, 0], d_p[:, 1, 1] = g_p, g_x
+        d_p[:, 1, 0], d_p[:, 1, 1] = -g_p, -g_x
         d_pdot = np.zeros((self.n, 2, 2))
         d_pdot[:, 0, 0] = dq_dpd + dq_dxd * rate
         return out, d_p, d_pdot

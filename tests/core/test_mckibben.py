@@ -117,6 +117,7 @@ def test_thread_length_and_turns_give_the_same_muscle():
     (dict(spring=-5.0), ["spring=-5"]),
     (dict(damping=-0.1), ["damping=-0.1"]),
     (dict(b=150.0, n=3.0), ["D0 and theta0, or as b and n"]),
+    (dict(), ["slack", "mass"]),
 ])
 def test_bad_input_names_the_element_and_the_parameter(params, words):
     with pytest.raises(ParameterError) as err:
@@ -180,3 +181,23 @@ def test_fig12_netlist_oscillates_between_the_turning_points(tmp_path):
     after = sol.t >= 10.0
     assert np.corrcoef(sol.pressure("tank")[after], sol["contraction_M1"][after])[0, 1] > 0.9
     assert plot_muscle_run(sol, "M1", ("tank", "out"), tmp_path / "f.png").stat().st_size > 10_000
+
+
+def test_quasi_static_muscle_in_the_oscillator_matches_the_hanging_mass():
+    """Without mass and damping (the weight as a preload) the force balance is algebraic
+    and is carried across the valve's folds: the same cycle as the 200 g mass."""
+    from pathlib import Path
+
+    from pneunet.analysis.muscle import muscle_cycle
+    from pneunet.netlist import parse_netlist
+
+    text = (Path(__file__).resolve().parents[2] / "netlists" / "fig12_mckibben.pn").read_text()
+    static = text.replace("mass=200g damping=20N*s/m", "preload={0.2*9.81}N")
+    assert "preload" in static
+    deck = parse_netlist(static)
+    assert deck.circuit.elements["M1"].kind == "mckibben_static"
+    quasi = muscle_cycle(deck.circuit.tran(50.0), "M1", "tank")
+    hanging = muscle_cycle(parse_netlist(text).circuit.tran(50.0), "M1", "tank")
+    assert quasi.pressure.period_s == pytest.approx(hanging.pressure.period_s, rel=2e-3)
+    assert quasi.contraction.p_min == pytest.approx(hanging.contraction.p_min, abs=0.05)
+    assert quasi.contraction.p_max == pytest.approx(hanging.contraction.p_max, abs=0.05)
