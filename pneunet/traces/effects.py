@@ -173,7 +173,7 @@ class DeadVolume(CircuitEffect):
         stored, pinned = set(), set()
         for s in circuit.elements.values():
             fam = elements.family(s.kind)
-            stored.update(s.nodes[p] for p in fam.storage_ports)
+            stored.update(s.nodes[p] for p in fam.storage_ports + fam.state_ports)
             pinned.update(s.nodes[p] for p in fam.pinned_ports)
             if fam.link_ports:  # a link's line node is at its volume's pressure: a dead
                 stored.add(s.nodes[fam.link_ports[0]])  # volume there is more of that volume
@@ -222,7 +222,7 @@ class Tube(CircuitEffect):
                 continue
             for k, port in enumerate(fam.ports):
                 node = s.nodes[k]
-                if port == "heat" or circuit.is_reference(node):
+                if port == "heat" or k in fam.state_ports or circuit.is_reference(node):
                     continue
                 # a node where this element meets only series resistances: the tube is
                 # a dead volume there plus a refitted resistance
