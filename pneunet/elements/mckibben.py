@@ -70,10 +70,9 @@ def _check(spec: ElementSpec) -> None:
     """One of (D0, theta0) or (b, n), a braid that can contract, a muscle that is not
     slack: else ParameterError."""
     p = spec.params
-    by_angle = not (np.isnan(p["D0"]) or np.isnan(p["theta0"]))
-    by_thread = not (np.isnan(p["b"]) or np.isnan(p["n"]))
-    if by_angle == by_thread or (by_angle and not (np.isnan(p["b"]) and np.isnan(p["n"]))) \
-            or (by_thread and not (np.isnan(p["D0"]) and np.isnan(p["theta0"]))):
+    given = {k for k in ("D0", "theta0", "b", "n") if not np.isnan(p[k])}
+    by_angle, by_thread = given == {"D0", "theta0"}, given == {"b", "n"}
+    if not (by_angle or by_thread):
         raise ParameterError("a mckibben needs its braid as D0 and theta0, or as b and n",
                              where=spec.where,
                              hint="e.g. L0=530mm D0=12mm theta0=25deg, or L0=530mm b=585mm n=6.6")
@@ -106,7 +105,8 @@ _PARAMS = {
     "n": Param("dimensionless", "turns of a thread around the muscle (with b)", low=0.0,
                low_inclusive=False, default=np.nan),
     "k_end": Param("dimensionless", "Tondu–Lopez end-effect factor k (1: ideal "
-                   "Chou–Hannaford; typically 1.0–1.5)", low=1.0, high=3.0, default=1.0),
+                   "Chou–Hannaford; above 1 a shorter stroke)", low=1.0, high=3.0,
+                   default=1.0),
     "mass": Param("mass", "mass hanging on the muscle, kg (gravity extends it)", low=0.0,
                   default=0.0),
     "spring": Param("stiffness", "spring resisting contraction, N/m", low=0.0, default=0.0),
@@ -141,7 +141,7 @@ class _Muscle(ElementFamily):
         self._load = GRAVITY * self.column("mass") + self.column("preload")  # N
         self._spring = 1e-3 * self.column("spring")                          # N/mm
         self._damp = 1e-3 * self.column("damping")                           # N·s/mm
-        self._mass = 1e-3 * self.column("mass")       # kg: N per mm/s²
+        self._mass = 1e-3 * self.column("mass")                             # N·s²/mm
         self._amb = opts.ambient
         self._rho1 = context.gas.capacitance(1.0, opts.temperature)  # mg/(kPa·mL)
 
@@ -233,8 +233,7 @@ class _Muscle(ElementFamily):
         """A run in which the highest pressure cannot pull the load off the stop."""
         top = p.max(axis=0)
         most = self.tension(top, 0.0)[0]
-        held = self._load > most
-        for k in np.flatnonzero(held):
+        for k in np.flatnonzero(self._load > most):
             warnings.warn(LoadWarning(
                 f"{self.specs[k].where}: the muscle cannot lift its load of "
                 f"{self._load[k]:.3g} N: at the run's highest pressure {top[k]:.4g} kPa it "
