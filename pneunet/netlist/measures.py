@@ -7,6 +7,11 @@ from .deck import Measure
 from .located import did_you_mean as _close, error_at as _err
 from .syntax import Pair, Word
 
+#: the unit slot of a signal quantity (``p(node)``, ``contraction(M1)``…): its levels are
+#: read in it and its measurements printed in its unit; other signals are plain numbers
+SIGNAL_SLOTS = {"p": "pressure", "mdot": "flow", "contraction": "length", "force": "force",
+                "volume": "volume", "V": "volume", "T": "temperature"}
+
 
 class MeasureStatements:
     """Mixin of the elaboration builder: ``.meas`` statements and their options."""
@@ -100,7 +105,7 @@ class MeasureStatements:
         return m
 
     def _level(self, sig, word):
-        slot = {"p": "pressure", "mdot": "flow"}.get(sig.quantity, "dimensionless")
+        slot = SIGNAL_SLOTS.get(sig.quantity, "dimensionless")
         return self._number(word, slot, f"level of {sig}", self.scope)
 
     def _meas_keys(self, m, items, allowed, time_slot, signal=None):

@@ -10,7 +10,9 @@ import numpy as np
 
 from .. import measure as M
 from ..errors import PneunetError
+from ..units import SLOTS
 from .deck import DC, Deck, Measure, Op, Tran
+from .measures import SIGNAL_SLOTS
 
 
 @dataclass
@@ -212,7 +214,7 @@ def _cross(args):
             "from": args.get("from")}
 
 
-MEAS_UNITS = {"p": "kPa", "mdot": "mg/s"}
+MEAS_UNITS = {quantity: SLOTS[slot] for quantity, slot in SIGNAL_SLOTS.items()}
 
 
 def measure_unit(m: Measure) -> str:
@@ -225,5 +227,5 @@ def measure_unit(m: Measure) -> str:
         return ""
     unit = MEAS_UNITS.get(m.signal.quantity, "")
     if m.kind == "integ" and unit:
-        return {"kPa": "kPa*s", "mg/s": "mg"}[unit]
+        return {"kPa": "kPa*s", "mg/s": "mg"}.get(unit, f"{unit}*s")
     return unit
