@@ -15,6 +15,7 @@ from pneunet import Circuit, ParameterError
 from pneunet.elements.mckibben import LoadWarning
 from pneunet.errors import NetlistError
 from pneunet.netlist import parse_netlist, print_circuit
+from pneunet.netlist.runner import run_deck
 
 AMBIENT = 100.0
 G = 9.81
@@ -149,10 +150,14 @@ def test_netlist_signals_and_round_trip():
     deck = parse_netlist("* m\n.options ambient=100kPa\nPH s 250kPa\nR1 s a 1\n"
                          "mckibben M1 a L0=200mm D0=12mm theta0=25deg mass=1kg damping=50\n"
                          ".tran 1s\n.meas tran x FIND contraction(M1) AT=1s\n"
+                         ".meas tran t WHEN contraction(M1)=1cm RISE=1\n"
                          ".save p(a) contraction(M1) force(M1) volume(M1)\n")
     text = print_circuit(deck.circuit)
     assert print_circuit(parse_netlist(text).circuit) == text
-    sol = deck.circuit.tran(1.0)
+    run = run_deck(deck)
+    sol = run.results[0][1]
+    assert run.measures["x"] == pytest.approx(sol["contraction_M1"][-1])
+    assert np.interp(run.measures["t"], sol.t, sol["contraction_M1"]) == pytest.approx(10.0)
     assert {"contraction_M1", "force_M1", "volume_M1"} <= set(sol.signals)
     assert not any(k.startswith("p_M1") for k in sol.signals)
     assert sol.units["contraction_M1"] == "mm" and sol.units["force_M1"] == "N"
