@@ -56,10 +56,8 @@ def consistent_state(dae, t, y_guess):
     return result.y, dae.derivative(t, result.y)
 
 
-def operating_point(circuit, *, t: float = 0.0, stability: bool = True) -> OperatingPoint:
-    """Steady state (ẏ = 0) of the circuit with its sources at time ``t``, and (unless
-    ``stability`` is False) whether it settles there (:mod:`~pneunet.engine.stability`)."""
-    dae = CircuitDAE(circuit)
+def _steady_state(dae, t):
+    """Newton's steady state (ẏ = 0) of every unknown at time ``t``, or SolverError."""
     y0 = dae.initial_state(t)
     everything = np.arange(dae.n)
     result = newton(_residual_jac(dae, t), y0, everything,
@@ -72,6 +70,14 @@ def operating_point(circuit, *, t: float = 0.0, stability: bool = True) -> Opera
                           hint="the circuit may have no steady state it can settle in (an "
                                "oscillator, or a closed volume): run a transient instead, or "
                                "give .ic values close to the expected state")
+    return result
+
+
+def operating_point(circuit, *, t: float = 0.0, stability: bool = True) -> OperatingPoint:
+    """Steady state (ẏ = 0) of the circuit with its sources at time ``t``, and (unless
+    ``stability`` is False) whether it settles there (:mod:`~pneunet.engine.stability`)."""
+    dae = CircuitDAE(circuit)
+    result = _steady_state(dae, t)
     sol = _build_solution(dae, np.array([t]), result.y[None, :], {}, ())
     pressures = {k[2:]: float(v[0]) for k, v in sol.signals.items() if sol.units[k] == "kPa"
                  and k.startswith("p_")}
@@ -115,8 +121,7 @@ def transient(circuit, t_stop: float, *, t_step: float | None = None, t_start: f
     dae = CircuitDAE(circuit)
     opts = circuit.options
     if start == "op":
-        op = operating_point(circuit, t=t_start, stability=False)
-        y0 = np.array([op.pressures[n] for n in dae.node_names])
+        y0 = _steady_state(dae, t_start).y  # element states too (no pressures)
     elif start == "ic":
         y0 = dae.initial_state(t_start)
     else:

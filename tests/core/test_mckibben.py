@@ -206,3 +206,11 @@ def test_quasi_static_muscle_in_the_oscillator_matches_the_hanging_mass():
     assert quasi.pressure.period_s == pytest.approx(hanging.pressure.period_s, rel=2e-3)
     assert quasi.contraction.p_min == pytest.approx(hanging.contraction.p_min, abs=0.05)
     assert quasi.contraction.p_max == pytest.approx(hanging.contraction.p_max, abs=0.05)
+
+
+def test_a_transient_may_start_from_the_operating_point():
+    """start='op' takes the muscle's state (no pressure) from the steady state too."""
+    sol = _circuit(250.0, mass=1.0, damping=50.0).tran(0.5, start="op")
+    x = sol["contraction_M1"]
+    assert x[0] == pytest.approx(L0 - _static_length(150.0, G), rel=1e-6)
+    assert np.ptp(x) < 1e-6
