@@ -159,6 +159,12 @@ class ElementFamily:
         """
         return np.empty(np.shape(t) + (self.n, 0))
 
+    def pinned_pressure_each(self, t: np.ndarray) -> np.ndarray:
+        """Pressures (n, len(pinned_ports)) with instance i at its own time t[i] (s)."""
+        if not self.n:
+            return np.empty((0, len(self.pinned_ports)))
+        return np.stack([self.pinned_pressure(float(ti))[i] for i, ti in enumerate(t)])
+
     def jumps(self, t_start: float, t_stop: float) -> np.ndarray:
         """Times where an input of this family jumps (the solver restarts there)."""
         return np.empty(0)

@@ -46,6 +46,17 @@ class _WaveformBank:
             out[..., i] = wave.value(t)
         return out
 
+    def value_each(self, t):
+        """Value of waveform i at its own time t[i] (s), shape (n,)."""
+        t = np.asarray(t, dtype=float)
+        out = np.empty(self.n)
+        out[self._const] = self._level
+        if self._pulse.size:
+            out[self._pulse] = self._low + self._swing * self._table.fraction(t[self._pulse])
+        for i, wave in self._other:
+            out[i] = wave.value(t[i])
+        return out
+
 
 @register
 class PressureSource(ElementFamily):
@@ -71,6 +82,10 @@ class PressureSource(ElementFamily):
         if t != self._last_t:  # IDA evaluates several times at one t: evaluate the bank once
             self._last_t, self._last_value = t, self._waveforms.value(t)[:, None]
         return self._last_value
+
+    def pinned_pressure_each(self, t):
+        """Pressure (n, 1) of instance i at its own time t[i] (s) (multirate cells)."""
+        return self._waveforms.value_each(t)[:, None]
 
     def flows(self, t, p, pdot):
         return np.zeros(p.shape)

@@ -261,3 +261,36 @@ class OperatingPoint(Summarized):
         if self.stability is not None:
             lines.append("  " + self.stability.describe())
         return "operating point\n" + "\n".join(lines)
+
+
+def build_solution(dae, times, states, stats, branch_jumps) -> Solution:
+    """Pressures of the unknown nodes now (the states); the pressures sources impose,
+    source flows and element signals when first read (:class:`LazySignals`)."""
+    import functools
+
+    states = states.reshape(len(times), dae.n)
+    states.setflags(write=False)  # the pressure signals are views of it, handed over uncopied
+    history = functools.cache(lambda: dae.full_pressures(times, states))
+    ready, units, pending = {}, {}, {}
+    for i, name in enumerate(dae.node_names):
+        if name not in dae.state_nodes:  # an element's own state: in its signals
+            ready[f"p_{name}"] = states[:, i]
+    fixed = [f"p_{name}" for name in dae.fixed_names if not dae.circuit.is_reference(name)]
+
+    def fixed_pressures():
+        return {key: history()[:, dae.node_index(key[2:])] for key in fixed}
+    pending.update(dict.fromkeys(fixed, fixed_pressures))
+    units.update(dict.fromkeys(list(ready) + fixed, "kPa"))
+    sources = [f"mdot_{name}" for name in dae.pinned_sources()]
+
+    def source_flows():
+        return {f"mdot_{name}": flow for name, flow in dae.source_flows(times, history()).items()}
+    pending.update(dict.fromkeys(sources, source_flows))
+    units.update(dict.fromkeys(sources, "mg/s"))
+    for names, signal_units, compute in dae.element_signal_groups(times, states, history):
+        pending.update(dict.fromkeys(names, compute))
+        units.update(zip(names, signal_units))
+    ordered = {k: pending[k] for k in fixed}  # node pressures first, as before
+    ordered.update((k, v) for k, v in pending.items() if k not in ordered)
+    return Solution(times, LazySignals(ready, ordered), units, stats, dae.circuit.title,
+                    branch_jumps)
