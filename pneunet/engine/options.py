@@ -10,6 +10,9 @@ from ..laws import DEFAULT_FLOW_BAND_KPA2
 from ..liquids import LIQUIDS, Liquid
 
 
+METHODS = ("auto", "single", "multirate")
+
+
 @dataclass(frozen=True)
 class SimulationOptions:
     """Options of a circuit's analyses (netlist ``.options``).
@@ -25,6 +28,10 @@ class SimulationOptions:
                         those nodes algebraic and folds are crossed by explicit jumps
     max_step            largest IDA step in s (0: no limit)
     fold_threshold      fold indicator below which a jump to the other branch is made
+    method              transient integration: 'single' (one IDA step for the whole
+                        circuit), 'multirate' (cells on their own steps, coupled through
+                        hub nodes; docs/numerics.md) or 'auto' (multirate for large
+                        circuits of many loosely coupled cells)
     """
 
     rtol: float = 1e-5
@@ -37,6 +44,7 @@ class SimulationOptions:
     dead_volume: float = 0.0
     max_step: float = 0.0
     fold_threshold: float = 1e-2
+    method: str = "auto"
 
     _RANGES = {
         "rtol": (1e-12, 1e-2), "atol": (1e-12, 10.0), "ambient": (1.0, 1e4),
@@ -55,6 +63,8 @@ class SimulationOptions:
                 raise ParameterError(f"option {key}={value} is outside [{lo:g}, {hi:g}]")
         if self.gas.lower() not in GASES:
             raise ParameterError(f"unknown gas {self.gas!r}", hint="known: " + ", ".join(GASES))
+        if self.method not in METHODS:
+            raise ParameterError(f"unknown method {self.method!r}", hint="known: " + ", ".join(METHODS))
         if self.fluid.lower() != "gas" and self.fluid.lower() not in LIQUIDS:
             raise ParameterError(f"unknown fluid {self.fluid!r}",
                                  hint="known: gas, " + ", ".join(LIQUIDS))

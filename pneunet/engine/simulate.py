@@ -14,7 +14,7 @@ import numpy as np
 from .assembly import CircuitDAE
 from .diagnostics import captured
 from ..errors import ParameterError, SolverError
-from .solution import LazySignals, OperatingPoint, Solution
+from .solution import OperatingPoint, Solution, build_solution
 from .stability import linear_stability
 from .solvers import available_backends
 from .solvers.base import EVENT, FAILED, Segment
@@ -78,7 +78,7 @@ def operating_point(circuit, *, t: float = 0.0, stability: bool = True) -> Opera
     ``stability`` is False) whether it settles there (:mod:`~pneunet.engine.stability`)."""
     dae = CircuitDAE(circuit)
     result = _steady_state(dae, t)
-    sol = _build_solution(dae, np.array([t]), result.y[None, :], {}, ())
+    sol = build_solution(dae, np.array([t]), result.y[None, :], {}, ())
     pressures = {k[2:]: float(v[0]) for k, v in sol.signals.items() if sol.units[k] == "kPa"
                  and k.startswith("p_")}
     flows = {k[5:]: float(v[0]) for k, v in sol.signals.items() if k.startswith("mdot_")}
@@ -129,6 +129,12 @@ def transient(circuit, t_stop: float, *, t_step: float | None = None, t_start: f
     y, yp = consistent_state(dae, t_start, y0)
     if dae.n == 0:  # every node held by a source: nothing to integrate
         return _sources_only(dae, t_start, t_stop, t_step, wall)
+    part = _partition_for(circuit, dae, backend)
+    if part is not None:
+        from .multirate import transient as multirate
+
+        algebraic = {dae.node_names[i] for i in dae.algebraic_idx}
+        return multirate(circuit, part, t_stop, t_step, t_start, y, algebraic, _single_rate)
 
     backends = available_backends()
     name = backend or "sksundae"
@@ -216,7 +222,36 @@ def transient(circuit, t_stop: float, *, t_step: float | None = None, t_start: f
                  output_points=len(times),
                  branch_jumps=len(record.jumps), unknowns=dae.n,
                  algebraic=int(dae.algebraic_idx.size), wall_time_s=_time.perf_counter() - wall)
-    return _build_solution(dae, times, states, stats, tuple(record.jumps))
+    return build_solution(dae, times, states, stats, tuple(record.jumps))
+
+
+#: unknowns from which ``method=auto`` looks for cells to integrate on their own steps
+AUTO_MULTIRATE_UNKNOWNS = 2000
+
+
+def _partition_for(circuit, dae, backend):
+    """The circuit's hub and cells when the multirate method integrates it, else None."""
+    method = circuit.options.method
+    if method == "single" or method == "auto" and (backend is not None
+                                                   or dae.n < AUTO_MULTIRATE_UNKNOWNS):
+        return None
+    from .partition import partition, unsupported, worth_partitioning
+
+    part = partition(circuit)
+    algebraic = {dae.node_names[i] for i in dae.algebraic_idx}
+    if method == "auto":
+        return None if worth_partitioning(part, algebraic) else part
+    why = unsupported(part, algebraic)
+    if why:
+        raise ParameterError(f"method=multirate cannot split this circuit: {why}",
+                             hint=".options method=single")
+    return part
+
+
+def _single_rate(circuit, t_stop, t_step, t_start):
+    """One independent cell (a circuit of its own) on the single-rate integrator."""
+    circuit.options = circuit.options.replace(method="single")
+    return transient(circuit, t_stop, t_step=t_step, t_start=t_start)
 
 
 #: output points a transient may ask for (8 bytes per point and unknown)
@@ -234,7 +269,7 @@ def _sources_only(dae, t_start, t_stop, t_step, wall) -> Solution:
     stats = dict(backend="none (no unknowns)", steps=0, output_points=len(times),
                  branch_jumps=0, unknowns=0, algebraic=0,
                  wall_time_s=_time.perf_counter() - wall)
-    return _build_solution(dae, times, np.empty((len(times), 0)), stats, ())
+    return build_solution(dae, times, np.empty((len(times), 0)), stats, ())
 
 
 class _Record:
@@ -336,43 +371,10 @@ def _failure(dae, seg, t, y, record, integrator):
     worst = dae.node_names[int(np.argmax(rate + np.abs(res) + (y_fail < VACUUM_KPA) * 1e300))] \
         if dae.n else "?"
     times, states = record.arrays()
-    partial = _build_solution(dae, times, states, dict(integrator.counters(), failed=True),
+    partial = build_solution(dae, times, states, dict(integrator.counters(), failed=True),
                               tuple(record.jumps))
     return SolverError(
         f"IDA stopped at t = {t_fail:.6g} s: {seg.message}", time=t_fail,
         where=f"node {worst}", partial=partial,
         hint="the pressure at this node changes fastest; try a tighter rtol, a larger "
              "flow_band (.options flow_band=50), or a small dead volume (.options dead_volume=0.05mL)")
-
-
-def _build_solution(dae, times, states, stats, branch_jumps) -> Solution:
-    """Pressures of the unknown nodes now (the states); the pressures sources impose,
-    source flows and element signals when first read (:class:`LazySignals`)."""
-    import functools
-
-    states = states.reshape(len(times), dae.n)
-    states.setflags(write=False)  # the pressure signals are views of it, handed over uncopied
-    history = functools.cache(lambda: dae.full_pressures(times, states))
-    ready, units, pending = {}, {}, {}
-    for i, name in enumerate(dae.node_names):
-        if name not in dae.state_nodes:  # an element's own state: in its signals
-            ready[f"p_{name}"] = states[:, i]
-    fixed = [f"p_{name}" for name in dae.fixed_names if not dae.circuit.is_reference(name)]
-
-    def fixed_pressures():
-        return {key: history()[:, dae.node_index(key[2:])] for key in fixed}
-    pending.update(dict.fromkeys(fixed, fixed_pressures))
-    units.update(dict.fromkeys(list(ready) + fixed, "kPa"))
-    sources = [f"mdot_{name}" for name in dae.pinned_sources()]
-
-    def source_flows():
-        return {f"mdot_{name}": flow for name, flow in dae.source_flows(times, history()).items()}
-    pending.update(dict.fromkeys(sources, source_flows))
-    units.update(dict.fromkeys(sources, "mg/s"))
-    for names, signal_units, compute in dae.element_signal_groups(times, states, history):
-        pending.update(dict.fromkeys(names, compute))
-        units.update(zip(names, signal_units))
-    ordered = {k: pending[k] for k in fixed}  # node pressures first, as before
-    ordered.update((k, v) for k, v in pending.items() if k not in ordered)
-    return Solution(times, LazySignals(ready, ordered), units, stats, dae.circuit.title,
-                    branch_jumps)

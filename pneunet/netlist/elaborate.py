@@ -40,7 +40,7 @@ OPTIONS = {
     "atol": ("atol", "pressure_difference"), "abstol": ("atol", "pressure_difference"),
     "ambient": ("ambient", "pressure"), "temperature": ("temperature", "temperature"),
     "temp": ("temperature", "temperature"), "gas": ("gas", None),
-    "fluid": ("fluid", None),
+    "fluid": ("fluid", None), "method": ("method", None),
     "flow_band": ("flow_band", "dimensionless"), "dead_volume": ("dead_volume", "volume"),
     "max_step": ("max_step", "time"), "fold_threshold": ("fold_threshold", "dimensionless"),
 }

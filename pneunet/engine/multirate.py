@@ -1,0 +1,388 @@
+"""Multirate transient of a hub and many cells: each cell on its own steps.
+
+The circuit is partitioned (:mod:`~pneunet.engine.partition`) into cells joined
+only through hub nodes.  Cells of one structure are integrated together as arrays
+by :mod:`~pneunet.engine.solvers.radau`, every cell with its own time step, error
+test and source corners, so a cell switching at its own time costs steps in that
+cell only.  Cells and hub are coupled by windowed waveform relaxation:
+
+1. over a window [T, T + H] the hub pressures are given at M + 1 sample times
+   (first: extrapolated from T), linear between samples;
+2. all cells are integrated across the window against them, and the mass each
+   cell draws from each hub node is integrated with the method's own weights
+   (so the hub loses exactly what the cells gain);
+3. the hub is integrated across the window with those masses drawn at constant
+   rate over each sample interval;
+4. if the hub's new samples differ from those the cells saw by at most the local
+   tolerance (weighted norm ≤ 1, weights 1/(rtol·|p| + atol)) the window is
+   accepted, else steps 2–4 repeat with the new samples; after
+   :data:`MAX_SWEEPS` the window is halved.  H grows while one or two sweeps suffice.
+
+Every cell meets IDA's local error test in IDA's norm; the coupling error is
+bounded by the same tolerance at every sample.  Cells with algebraic nodes and no
+hub (cells driven by ideal sources only) are independent circuits: each runs
+through the single-rate integrator of its own, with fold jumps.
+"""
+from __future__ import annotations
+
+import time as _time
+
+import numpy as np
+
+from .assembly import CircuitDAE
+from .cells import CellBatch
+from .partition import Cell, Partition
+from .solution import Solution, build_solution
+from .solvers import radau
+from ..workers import process_pool
+
+SAMPLES = 8          # hub sample intervals per window: at least,
+MAX_SAMPLES = 256    # at most; else one per step of the hub
+MAX_SWEEPS = 6       # waveform-relaxation sweeps before a window is halved
+COUPLING_TOL = 10   # accepted hub-sample change between sweeps, in local tolerances
+DEFAULT_OUTPUTS = 1000
+
+
+def transient(circuit, part: Partition, t_stop: float, t_step: float | None, t_start: float,
+              y0: np.ndarray, algebraic: set[str], single_rate) -> Solution:
+    """Multirate transient from the full state ``y0`` (kPa, in the circuit DAE's order).
+    Cells with ``algebraic`` nodes (no volume; folds possible) and no hub run each on
+    its own through ``single_rate(circuit, t_stop, t_step, t_start)``."""
+    wall = _time.perf_counter()
+    dae = CircuitDAE(circuit)
+    opts = circuit.options
+    times = (np.append(np.arange(t_start, t_stop, t_step)[1:], t_stop) if t_step else
+             np.linspace(t_start, t_stop, DEFAULT_OUTPUTS + 1)[1:])
+    times = np.concatenate([[t_start], times])
+    out = np.empty((times.size, dae.n))
+    out[0] = y0
+    alone = [c for c in part.cells if any(n in algebraic for n in c.nodes)]
+    groups = [_Group(circuit, part, ids, dae, y0, times, out, t_start, t_stop)
+              for ids in part.groups if not any(n in algebraic for n in part.cells[ids[0]].nodes)]
+    stats = dict(method="multirate", cells=len(part.cells), groups=len(groups),
+                 hub_nodes=len(part.hub_nodes), cells_alone=len(alone))
+    count = radau.Counters()
+    if alone:
+        alone_steps, jumps = _run_independently(circuit, alone, single_rate, (t_stop, t_step, t_start),
+                                                times, out, dae)
+        count.steps += alone_steps
+        stats["branch_jumps"] = jumps
+    if part.hub_nodes:
+        hub = _Hub(circuit, part, dae, y0, times, out, t_start)
+        windows = _relax(groups, hub, t_start, t_stop, opts, count)
+        stats.update(windows)
+    else:
+        for group in groups:
+            group.advance(t_stop, None, opts, count)
+    stats.update(steps=count.steps, rejected=count.rejected, passes=count.passes,
+                 residual_calls=count.residuals, jacobian_calls=count.jacobians,
+                 output_points=int(times.size), unknowns=dae.n,
+                 algebraic=len(algebraic), backend="radau5 (multirate)",
+                 wall_time_s=_time.perf_counter() - wall)
+    return build_solution(dae, times, out, stats, ())
+
+
+class _Group:
+    """The cells of one structure: batch, state, corners and output recorder."""
+
+    def __init__(self, circuit, part, ids, dae, y0, times, out, t_start, t_stop):
+        cells = [part.cells[i] for i in ids]
+        self.cells = cells
+        self.batch = CellBatch(circuit, cells)
+        self.cols = np.array([[dae.node_index(n) for n in c.nodes] for c in cells], dtype=int)
+        self.hub_cols = [part.hub_nodes.index(h) for h in cells[0].hub_nodes]
+        self.corners = radau.Corners(*_cell_corners(circuit, cells, t_start, t_stop))
+        self.times, self.out = times, out
+        self.next_out = np.ones(len(cells), dtype=int)
+        self.t_start, self.span = t_start, t_stop - t_start
+        self.y0 = y0[self.cols]
+        self.state = None
+        self.drawn = None
+
+    def begin(self, opts):
+        if self.state is None and self.batch.differential.all():
+            self.state = radau.start(self.batch, self.t_start, self.y0, self.span,
+                                     opts.rtol, opts.atol)
+
+    def advance(self, t_end, S, opts, count):
+        """Integrate to ``t_end``; with sample times ``S``, record in self.drawn the
+        mass (mg) the cells have drawn from each hub node and its rate (mg/s) there."""
+        self.begin(opts)
+        if S is not None:
+            mass, rate = np.zeros((S.size, self.batch.nb)), np.zeros((S.size, self.batch.nb))
+            mass[0], rate[0] = self.state.M.sum(axis=0), self.state.Q.sum(axis=0)
+            next_sample = np.ones(self.batch.G, dtype=int)
+
+        def on_step(rows, before, after):
+            _record(self.times, self.next_out, rows, before, after, self._write)
+            if S is not None:
+                _record(S, next_sample, rows, before, after, lambda r, k, m, q: (
+                    np.add.at(mass, k, m), np.add.at(rate, k, q)), mass=True)
+        radau.advance(self.batch, self.state, t_end, opts.rtol, opts.atol, self.corners,
+                      on_step, count)
+        self.drawn = (mass, rate) if S is not None else None
+
+    def _write(self, rows, k, y, _):
+        self.out[k[:, None], self.cols[rows]] = y
+
+    def snapshot(self):
+        return self.state.copy(), self.corners.next.copy(), self.next_out.copy()
+
+    def restore(self, saved):
+        state, corners, next_out = saved
+        self.state = state.copy()
+        self.corners.next[:] = corners
+        self.next_out[:] = next_out
+
+
+class _Hub:
+    """The hub nodes as one system, with the cells' draw injected."""
+
+    def __init__(self, circuit, part, dae, y0, times, out, t_start):
+        cell = Cell(part.hub_elements, list(part.hub_nodes), [], list(part.hub_sources))
+        self.batch = CellBatch(circuit, [cell], hub_nodes=part.hub_nodes, title="hub")
+        self.cols = np.array([dae.node_index(n) for n in cell.nodes])
+        corners, jumps = _cell_corners(circuit, [cell], t_start, times[-1])
+        self.corners = radau.Corners(corners, jumps)
+        self.times, self.out = times, out
+        self.next_out = np.ones(1, dtype=int)
+        self.y0, self.t_start = y0[self.cols][None, :], t_start
+        self.batch.injection = self._injection
+        self._draw = self._seen = None
+        self.slope = 0.0
+        self.state = None
+
+    def begin(self, draw, opts):
+        """The hub's state at the start, the cells drawing ``draw`` (n_hub,) mg/s."""
+        self._draw = lambda t: (None, np.broadcast_to(draw, (len(t), draw.size)))
+        self.state = radau.start(self.batch, self.t_start, self.y0, self.times[-1] - self.t_start,
+                                 opts.rtol, opts.atol)
+
+    def _injection(self, t, Y):
+        """The cells' draw at times t, corrected by its slope for the difference
+        between the hub's pressure and the one the cells saw."""
+        rate = self._draw(t)[1]
+        if self._seen is None:
+            return rate, None
+        return (rate + self.slope * (Y - self._seen(t)[0]),
+                np.broadcast_to(self.slope, Y.shape))
+
+    def advance(self, S, drawn, seen, slope, opts, count):
+        """Integrate across the window ``S`` with the cells' draw ``drawn`` (mass and
+        rate at S) by cells that saw hub pressures ``seen`` (value and slope at S) and
+        whose draw grows by ``slope`` (n_hub,) mg/(s·kPa) per kPa of hub pressure;
+        return the hub's pressures and their rates at S (M + 1, n_hub) each."""
+        self._draw, self._seen, self.slope = _cubic(S, *drawn), _cubic(S, *seen), slope
+        values, rates = np.empty((S.size, self.batch.k)), np.empty((S.size, self.batch.k))
+        values[0], rates[0] = self.state.Y[0], self.state.Yd[0]
+        next_sample = np.ones(1, dtype=int)
+
+        def on_step(rows, before, after):
+            _record(self.times, self.next_out, rows, before, after, self._write)
+            _record(S, next_sample, rows, before, after,
+                    lambda r, k, y, d: (values.__setitem__(k, y), rates.__setitem__(k, d)))
+        radau.advance(self.batch, self.state, S[-1], opts.rtol, opts.atol, self.corners,
+                      on_step, count)
+        return values, rates
+
+    def _write(self, rows, k, y, _):
+        self.out[k[:, None], self.cols[None, :]] = y
+
+    def snapshot(self):
+        return self.state.copy(), self.corners.next.copy(), self.next_out.copy()
+
+    def restore(self, saved):
+        state, corners, next_out = saved
+        self.state = state.copy()
+        self.corners.next[:] = corners
+        self.next_out[:] = next_out
+
+
+def _relax(groups, hub, t_start, t_stop, opts, count) -> dict:
+    """Windowed waveform relaxation of ``groups`` and ``hub`` to ``t_stop``."""
+    draw = np.zeros(len(hub.cols))
+    flat = np.repeat(hub.y0, 2, axis=0)
+    for group in groups:
+        group.batch.boundary = _values(_cubic(np.array([t_start, t_stop]),
+                                              flat[:, group.hub_cols],
+                                              np.zeros_like(flat[:, group.hub_cols])))
+        group.begin(opts)
+        np.add.at(draw, group.hub_cols, group.state.Q.sum(axis=0))
+    hub.begin(draw, opts)
+    T, H = t_start, (t_stop - t_start) / 50
+    windows = sweeps = halvings = 0
+    worst = 0.0
+    while T < t_stop - 1e-12 * max(1.0, abs(t_stop)):
+        H = min(H, t_stop - T)
+        if t_stop - T - H < 0.2 * H:
+            H = t_stop - T
+        m = int(np.clip(np.ceil(H / hub.state.h[0]), SAMPLES, MAX_SAMPLES))
+        S = T + H * np.arange(m + 1) / m
+        S[-1] = T + H
+        p = (hub.state.Y[0] + (S - T)[:, None] * hub.state.Yd[0],
+             np.repeat(hub.state.Yd, S.size, axis=0))
+        saved = [g.snapshot() for g in groups]
+        saved_hub = hub.snapshot()
+        slope = _draw_slope(groups, len(hub.cols))
+        for sweep in range(1, MAX_SWEEPS + 1):
+            sweeps += 1
+            mass, rate = np.zeros_like(p[0]), np.zeros_like(p[0])
+            for group, snap in zip(groups, saved):
+                group.restore(snap)
+                group.batch.boundary = _values(_cubic(S, p[0][:, group.hub_cols],
+                                                      p[1][:, group.hub_cols]))
+                group.advance(T + H, S, opts, count)
+                mass[:, group.hub_cols] += group.drawn[0]
+                rate[:, group.hub_cols] += group.drawn[1]
+            hub.restore(saved_hub)
+            new = hub.advance(S, (mass, rate), p, slope, opts, count)
+            change = float(np.max(np.abs(new[0] - p[0]) / (opts.rtol * np.abs(new[0]) + opts.atol)))
+            p = new
+            if change <= COUPLING_TOL:
+                break
+        else:
+            for group, snap in zip(groups, saved):
+                group.restore(snap)
+            hub.restore(saved_hub)
+            H *= 0.5
+            halvings += 1
+            continue
+        worst = max(worst, change)
+        windows += 1
+        T = float(S[-1])
+        H *= 2.0 if sweep <= 2 else 1.3 if sweep == 3 else 1.0 if sweep == 4 else 0.7
+    return dict(windows=windows, sweeps=sweeps, window_halvings=halvings,
+                coupling_defect=worst)
+
+
+def _draw_slope(groups, n_hub, dp=1e-3):
+    """How much more the cells draw from each hub node per kPa of its pressure, now
+    (a difference quotient of every cell's boundary outflow), mg/(s·kPa)."""
+    slope = np.zeros(n_hub)
+    for group in groups:
+        st, batch = group.state, group.batch
+        restore = batch.boundary
+        seen = restore(st.t)
+        batch.boundary = lambda t: seen
+        _, base = batch.evaluate(st.t, st.Y, st.Yd)
+        for j, col in enumerate(group.hub_cols):
+            shifted = seen.copy()
+            shifted[:, j] += dp
+            batch.boundary = lambda t, b=shifted: b
+            _, q = batch.evaluate(st.t, st.Y, st.Yd)
+            slope[col] += float(np.sum(q[:, j] - base[:, j])) / dp
+        batch.boundary = restore
+    return slope
+
+
+def _cubic(S, value, slope):
+    """The piecewise cubic Hermite through ``value`` and ``slope`` (M + 1, c) at the
+    sample times S: a function of times t (m,) giving (values, slopes) (m, c)."""
+    h = np.diff(S)[:, None]
+    dy = (value[1:] - value[:-1]) / h
+    c2 = (3 * dy - 2 * slope[:-1] - slope[1:]) / h      # y = y_k + d_k τ + c2 τ² + c3 τ³
+    c3 = (slope[:-1] + slope[1:] - 2 * dy) / (h * h)
+    last = S.size - 2
+
+    def at(t):
+        k = np.searchsorted(S, t, side="right") - 1
+        k = np.minimum(np.maximum(k, 0), last)
+        tau = (t - S[k])[:, None]
+        b, c, d = slope[k], c2[k], c3[k]
+        return value[k] + tau * (b + tau * (c + tau * d)), b + tau * (2 * c + 3 * tau * d)
+    return at
+
+
+def _values(curve):
+    return lambda t: curve(t)[0]
+
+
+def _hermite(s, h, y0, d0, y1, d1):
+    """Cubic Hermite value and slope at fractions s of steps of length h."""
+    s2, s3 = s * s, s * s * s
+    value = ((2 * s3 - 3 * s2 + 1) * y0 + (s3 - 2 * s2 + s) * h * d0
+             + (3 * s2 - 2 * s3) * y1 + (s3 - s2) * h * d1)
+    slope = ((6 * s2 - 6 * s) * (y0 - y1) / h + (3 * s2 - 4 * s + 1) * d0
+             + (3 * s2 - 2 * s) * d1)
+    return value, slope
+
+
+def _record(times, nxt, rows, before, after, write, mass=False):
+    """For each step that passed one of ``times`` (shared, increasing), write the
+    cubic Hermite interpolant's value and slope there; ``nxt`` is each system's next
+    time index.  ``mass``: interpolate the drawn mass M (rate Q), not the state."""
+    t0, Y0, Yd0, Q0, M0 = before
+    t1, Y1, Yd1, Q1, M1 = after
+    y0, d0, y1, d1 = (M0, Q0, M1, Q1) if mass else (Y0, Yd0, Y1, Yd1)
+    last = times.size - 1
+    while True:
+        k = nxt[rows]
+        hit = np.flatnonzero((k <= last) & (times[np.minimum(k, last)] <= t1 * (1 + 1e-14)))
+        if not hit.size:
+            return
+        r, k = rows[hit], k[hit]
+        h = (t1[hit] - t0[hit])[:, None]
+        s = np.clip((times[k] - t0[hit])[:, None] / h, 0.0, 1.0)
+        write(r, k, *_hermite(s, h, y0[hit], d0[hit], y1[hit], d1[hit]))
+        nxt[r] += 1
+
+
+def _cell_corners(circuit, cells, t_start, t_stop):
+    """Per cell: the corners and jumps (s) of its sources' waveforms in (t_start, t_stop)."""
+    times, jumps = [], []
+    for cell in cells:
+        waves = [circuit.elements[s].params["value"] for s in cell.sources
+                 if "value" in circuit.elements[s].params]
+        waves += [circuit.elements[e].params["value"] for e in cell.elements
+                  if hasattr(circuit.elements[e].params.get("value"), "breakpoints")]
+        b = [w.breakpoints(t_start, t_stop) for w in waves if hasattr(w, "breakpoints")]
+        j = [w.jumps(t_start, t_stop) for w in waves if hasattr(w, "jumps")]
+        times.append(np.unique(np.concatenate(b)) if b else np.empty(0))
+        jumps.append(np.unique(np.concatenate(j)) if j else np.empty(0))
+    return times, jumps
+
+
+def _run_independently(circuit, cells, single_rate, span, times, out, dae):
+    """Cells without a hub, as circuits of their own (on both cores when there are
+    many); their pressures go into ``out`` on the output ``times``.  Returns the
+    integrator steps and branch jumps, summed."""
+    global _ALONE
+    _ALONE = (circuit, cells, single_rate, span, times)
+    chunks = np.array_split(np.arange(len(cells)), min(len(cells), 2 * PARALLEL_WORKERS))
+    pool = process_pool(PARALLEL_WORKERS) if len(cells) >= PARALLEL_MIN_CELLS else None
+    try:
+        results = list(pool.map(_run_cells, chunks)) if pool else [_run_cells(c) for c in chunks]
+    finally:
+        if pool is not None:
+            pool.shutdown()
+        _ALONE = None
+    steps = jumps = 0
+    for block in results:
+        for nodes, values, cell_steps, cell_jumps in block:
+            out[:, [dae.node_index(n) for n in nodes]] = values
+            steps, jumps = steps + cell_steps, jumps + cell_jumps
+    return steps, jumps
+
+
+_ALONE = None  # what the forked workers of _run_independently read
+PARALLEL_WORKERS = 2
+PARALLEL_MIN_CELLS = 8
+
+
+def _run_cells(indices):
+    """Run the cells ``indices`` of ``_ALONE``: (nodes, pressures on the output times,
+    steps, jumps) for each."""
+    from .circuit import Circuit
+
+    circuit, cells, single_rate, (t_stop, t_step, t_start), times = _ALONE
+    results = []
+    for cell in (cells[i] for i in indices):
+        sub = Circuit(circuit.title, circuit.options)
+        for name in cell.sources + cell.elements:
+            sub.elements[name] = circuit.elements[name]
+        sub.initial.update({n: v for n, v in circuit.initial.items() if n in cell.nodes})
+        sol = single_rate(sub, t_stop, t_step, t_start)
+        values = np.column_stack([np.interp(times, sol.t, sol.pressure(n)) for n in cell.nodes])
+        results.append((cell.nodes, values, int(sol.stats.get("steps", 0)),
+                        int(sol.stats.get("branch_jumps", 0))))
+    return results

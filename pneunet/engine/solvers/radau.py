@@ -1,0 +1,322 @@
+"""Radau IIA (order 5) on many small DAE systems at once, each on its own steps.
+
+A batch (:class:`~pneunet.engine.cells.CellBatch`) holds G independent systems
+F_g(t_g, y_g, ẏ_g) = 0 of k unknowns.  Every pass of :func:`advance` lets each
+system that has not reached its target take one step of its own size: arrays over
+all G systems, one (3k, 3k) Newton matrix per system.
+
+The method is the three-stage Radau IIA collocation method (Hairer & Wanner,
+*Solving ODEs II*, IV.8): L-stable, stiffly accurate, order 5, for index-1 DAEs.
+The stage increments Z_i = Y_i − y_n solve F(t_n + c_i·h, y_n + Z_i, Ẏ_i) = 0 with
+Ẏ = A⁻¹Z/h, by simplified Newton with ∂F/∂y and ∂F/∂ẏ from the start of the step.
+The local error is Hairer's embedded estimate (order 3)
+
+    e = (γ₀⁻¹/h·M + J)⁻¹ · (M·ẏ_n + M·Σ d_i Z_i / h),   M = ∂F/∂ẏ, J = ∂F/∂y,
+
+accepted when its weighted RMS norm with weights 1/(rtol·|y_n| + atol) — IDA's
+norm — is at most 1, for each system on its own.  Being one-step, a system
+restarts at a window boundary with only its state and step size, which waveform
+relaxation (:mod:`pneunet.engine.multirate`) needs.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+
+import numpy as np
+
+from ...errors import SolverError
+
+_S6 = np.sqrt(6.0)
+C = np.array([(4.0 - _S6) / 10.0, (4.0 + _S6) / 10.0, 1.0])
+A = np.array([[(88 - 7 * _S6) / 360, (296 - 169 * _S6) / 1800, (-2 + 3 * _S6) / 225],
+              [(296 + 169 * _S6) / 1800, (88 + 7 * _S6) / 360, (-2 - 3 * _S6) / 225],
+              [(16 - _S6) / 36, (16 + _S6) / 36, 1.0 / 9.0]])
+A_INV = np.linalg.inv(A)
+B = A[2]                                     # stiffly accurate: y_n+1 = y_n + Z_3
+_D = np.array([-(13 + 7 * _S6) / 3, (-13 + 7 * _S6) / 3, -1.0 / 3.0])
+
+
+
+def _transformation():
+    """T with T⁻¹·A⁻¹·T = [[γ, 0, 0], [0, α, β], [0, −β, α]]: the stage equations
+    split into one real and one complex k×k system (Hairer & Wanner IV.8)."""
+    values, vectors = np.linalg.eig(A_INV)
+    real = int(np.argmin(np.abs(values.imag)))
+    pair = [i for i in range(3) if i != real and values[i].imag > 0][0]
+    T = np.column_stack([vectors[:, real].real, vectors[:, pair].real, vectors[:, pair].imag])
+    blocks = np.linalg.inv(T) @ A_INV @ T
+    return T, np.linalg.inv(T), blocks[0, 0], complex(blocks[1, 1], -blocks[1, 2])
+
+
+T, T_INV, _GAMMA, _ALPHA_BETA = _transformation()   # γ = 1/γ₀ ≈ 3.6378, α − iβ
+NEWTON_ITERATIONS = 3
+NEWTON_TOL = 0.03     # estimated distance to the stage solution, in tolerance units
+SAFETY, GROW, SHRINK = 0.9, 6.0, 0.2
+
+
+@dataclass
+class BatchState:
+    """Per system: time t (s), next step h (s), state Y and rate Yd (G, k), its
+    boundary outflows Q (G, nb, mg/s) and their integral M since the start (mg)."""
+
+    t: np.ndarray
+    h: np.ndarray
+    Y: np.ndarray
+    Yd: np.ndarray
+    Q: np.ndarray
+    M: np.ndarray
+    Z: np.ndarray = None       # (3, G, k) stage increments of the last accepted step
+    h_last: np.ndarray = None  # its length (s)
+    err_last: np.ndarray = None  # its error norm (the predictive step control's memory)
+    fresh: np.ndarray = None   # no usable last step (start, or after a jump)
+
+    def copy(self) -> "BatchState":
+        return BatchState(*(getattr(self, f.name).copy() for f in fields(self)))
+
+
+@dataclass
+class Counters:
+    steps: int = 0          # accepted steps, summed over systems
+    rejected: int = 0
+    passes: int = 0         # batched step attempts
+    residuals: int = 0      # batched residual evaluations (one per stage)
+    jacobians: int = 0      # batched Jacobian-block evaluations
+
+
+class Corners:
+    """Each system's source corners: times (s) its steps must land on, and which of
+    them are jumps of a value (the rate ẏ is recomputed after those)."""
+
+    def __init__(self, times: list[np.ndarray], jumps: list[np.ndarray]):
+        width = max([len(t) for t in times] + [1])
+        self.times = np.full((len(times), width + 1), np.inf)
+        self.jump = np.zeros_like(self.times, dtype=bool)
+        for g, (ts, js) in enumerate(zip(times, jumps)):
+            ts = np.asarray(ts, dtype=float)
+            self.times[g, :ts.size] = ts
+            self.jump[g, :ts.size] = np.isin(ts, js)
+        self.next = np.zeros(len(times), dtype=int)
+
+    def upcoming(self, t: np.ndarray) -> np.ndarray:
+        """The next corner (s) after each system's time (inf: none)."""
+        rows = np.arange(len(t))
+        while True:
+            behind = self.times[rows, self.next] <= t * (1 + 1e-13) + 1e-13
+            if not behind.any():
+                return self.times[rows, self.next]
+            self.next[behind] += 1
+
+    def jumps_at(self, rows: np.ndarray, t: np.ndarray) -> np.ndarray:
+        """Those of ``rows`` whose next corner is a jump at their time ``t``."""
+        k = self.next[rows]
+        return rows[self.jump[rows, k] & (self.times[rows, k] == t)]
+
+
+def wrms(x: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """Weighted RMS norm of each row (G,)."""
+    return np.sqrt(np.mean((x * weights) ** 2, axis=1))
+
+
+def start(problem, t0: float, Y: np.ndarray, span: float, rtol: float, atol: float) -> BatchState:
+    """The state at t0 with consistent rates and a cautious first step."""
+    G = Y.shape[0]
+    t = np.full(G, float(t0))
+    Yd = problem.rates(t, Y, np.zeros_like(Y))
+    _, Q = problem.evaluate(t, Y, Yd)
+    speed = wrms(Yd, 1.0 / (rtol * np.abs(Y) + atol))  # tolerance units per second
+    h = np.clip(10.0 / np.maximum(speed, 1e-300), 1e-9 * span, span)
+    return BatchState(t, h, Y.copy(), Yd, Q, np.zeros_like(Q), np.zeros((3,) + Y.shape),
+                      h.copy(), np.full(G, 1e-2), np.ones(G, dtype=bool))
+
+
+def advance(problem, st: BatchState, t_end: float, rtol: float, atol: float,
+            corners: Corners | None = None, on_step=None, count: Counters | None = None):
+    """Step every system of ``st`` to ``t_end`` (s), landing on its corners.
+
+    ``on_step(rows, before, after)`` is called after each pass with the systems that
+    took a step and their (t, Y, Yd, Q, M) before and after it.
+    """
+    count = count if count is not None else Counters()
+    G, k = st.Y.shape
+    diff = problem.differential
+    tiny = 1e-12 * max(1.0, abs(t_end))
+    while True:
+        active = st.t < t_end - tiny
+        if not active.any():
+            return count
+        count.passes += 1
+        target = np.full(G, t_end)
+        if corners is not None:
+            target = np.minimum(target, corners.upcoming(st.t))
+        room = target - st.t
+        h = np.where(room <= st.h, room, np.where(room < 1.5 * st.h, 0.5 * room, st.h))
+        h = np.where(active, h, 1.0)
+        _check_step(problem, st, active, h)
+        weights = 1.0 / (rtol * np.abs(st.Y) + atol)
+        _, _, jac, mass = problem.evaluate(st.t, st.Y, st.Yd, jacobian=True)
+        count.jacobians += 1
+        newton = _newton_matrices(jac, mass, h, active)
+        Z, Yd_stages, Q_stages, ok, iterations = _solve_stages(problem, st, h, newton, weights,
+                                                               active, count)
+        error = _error_estimate(newton[0], mass, st.Yd, Z, h)
+        err = np.maximum(wrms(error[:, diff], weights[:, diff]) if diff.any() else np.zeros(G),
+                         1e-10)
+        accepted = active & ok & (err <= 1.0)
+        new_h = _next_step(st, h, err, iterations, accepted)
+        new_h = np.where(ok, new_h, 0.5 * h)
+        clipped = h < st.h
+        st.h = np.where(active, np.where(accepted & clipped, np.maximum(st.h, new_h), new_h), st.h)
+        count.rejected += int(np.count_nonzero(active & ~accepted))
+        rows = np.flatnonzero(accepted)
+        if not rows.size:
+            continue
+        count.steps += rows.size
+        st.Z[:, rows], st.h_last[rows], st.fresh[rows] = Z[:, rows], h[rows], False
+        st.err_last[rows] = np.maximum(err[rows], 1e-2)
+        before = (st.t[rows], st.Y[rows], st.Yd[rows], st.Q[rows], st.M[rows])
+        t_new = st.t[rows] + h[rows]
+        st.t[rows] = np.where(np.abs(t_new - target[rows]) <= tiny, target[rows], t_new)
+        st.M[rows] += h[rows][:, None] * (B[0] * Q_stages[0, rows] + B[1] * Q_stages[1, rows]
+                                           + B[2] * Q_stages[2, rows])
+        st.Y[rows] += Z[2, rows]
+        st.Yd[rows], st.Q[rows] = Yd_stages[2, rows], Q_stages[2, rows]
+        if corners is not None:
+            jumped = corners.jumps_at(rows, st.t[rows])
+            if jumped.size:
+                _restart_rates(problem, st, jumped)
+        if on_step is not None:
+            on_step(rows, before, (st.t[rows], st.Y[rows], st.Yd[rows], st.Q[rows], st.M[rows]))
+
+
+def _next_step(st, h, err, iterations, accepted):
+    """Step sizes after a step of error ``err``: Hairer's rule with his safety factor
+    for slow Newton convergence and, after an accepted step, Gustafsson's predictive
+    control (radau5), within [SHRINK, GROW]·h."""
+    safety = SAFETY * (2 * NEWTON_ITERATIONS + 1) / (iterations + 2 * NEWTON_ITERATIONS)
+    quot = np.clip(err ** 0.25 / safety, 1.0 / GROW, 1.0 / SHRINK)
+    predictive = accepted & ~st.fresh
+    gustafsson = np.clip(st.h_last / h * (err * err / st.err_last) ** 0.25 / safety,
+                         1.0 / GROW, 1.0 / SHRINK)
+    quot = np.where(predictive, np.maximum(quot, gustafsson), quot)
+    return h / quot
+
+
+def _check_step(problem, st, active, h):
+    small = active & (h < 1e-13 * np.maximum(1.0, np.abs(st.t)))
+    if small.any():
+        g = int(np.flatnonzero(small)[0])
+        node = problem.names[g][0]
+        raise SolverError(f"the step of the cell at node {node} collapsed at t = {st.t[g]:.6g} s",
+                          time=float(st.t[g]), where=f"node {node}",
+                          hint=".options method=single (one step for the whole circuit)")
+
+
+def _newton_matrices(jac, mass, h, active):
+    """Inverses of the real and complex iteration matrices γ/h·M + J and
+    (α − iβ)/h·M + J per system, (G, k, k) each (identity for inactive systems)."""
+    k = jac.shape[1]
+    scale = 1.0 / h[:, None, None]
+    real = _GAMMA * scale * mass + jac
+    pair = _ALPHA_BETA * scale * mass + jac
+    real[~active], pair[~active] = np.eye(k), np.eye(k)
+    return _inverse(real), _inverse(pair)
+
+
+def _inverse(m):
+    """Inverses of a stack of small matrices (G, k, k): by formula for k ≤ 2."""
+    k = m.shape[-1]
+    if k == 1:
+        return 1.0 / m
+    if k == 2:
+        a, b, c, d = m[:, 0, 0], m[:, 0, 1], m[:, 1, 0], m[:, 1, 1]
+        det = a * d - b * c
+        if np.all(det != 0):
+            out = np.empty_like(m)
+            out[:, 0, 0], out[:, 0, 1], out[:, 1, 0], out[:, 1, 1] = d, -b, -c, a
+            return out / det[:, None, None]
+    try:
+        return np.linalg.inv(m)
+    except np.linalg.LinAlgError:
+        return np.linalg.pinv(m)
+
+
+def _apply(inverse, v):
+    """inverse (G, k, k) times v (G, k), for small k."""
+    return np.einsum("gab,gb->ga", inverse, v) if v.shape[-1] > 4 else \
+        (inverse * v[:, None, :]).sum(axis=-1)
+
+
+def _mix(matrix, stages):
+    """The 3×3 ``matrix`` applied along the stage axis of ``stages`` (3, G, ·)."""
+    return (matrix @ stages.reshape(3, -1)).reshape(stages.shape)
+
+
+def _solve_stages(problem, st, h, inverse, weights, active, count):
+    """Stage increments Z (3, G, k), stage rates and boundary outflows (3, G, ·), and
+    per system: convergence and the Newton iterations it took."""
+    G, k = st.Y.shape
+    Z = np.where(st.fresh[None, :, None], (C[:, None, None] * h[None, :, None]) * st.Yd[None],
+                 _extrapolate(st.Z, h / st.h_last))
+    ok = ~active
+    iterations = np.zeros(G)
+    previous = None
+    residual = np.empty((3, G, k))
+    outflow = np.empty((3,) + st.Q.shape)
+    for _ in range(NEWTON_ITERATIONS):
+        rates = _mix(A_INV, Z) / h[None, :, None]
+        for i in range(3):
+            residual[i], outflow[i] = problem.evaluate(st.t + C[i] * h, st.Y + Z[i], rates[i])
+        count.residuals += 3
+        delta = _newton_update(inverse, residual)
+        size = np.sqrt(np.mean((delta * weights[None]) ** 2, axis=(0, 2)))
+        Z = Z + np.where((active & ~ok)[None, :, None], delta, 0.0)
+        if previous is not None:
+            rate = size / np.maximum(previous, 1e-300)
+            done = (rate < 1.0) & (rate / np.maximum(1.0 - rate, 1e-12) * size <= NEWTON_TOL)
+        else:
+            done = size <= NEWTON_TOL
+        iterations += ~ok
+        ok = ok | done
+        if ok.all():
+            break
+        previous = size
+    return Z, _mix(A_INV, Z) / h[None, :, None], outflow, ok, iterations
+
+
+def _newton_update(inverse, residual):
+    """−(∂F/∂Z)⁻¹·F for stage residuals F (3, G, k), in the transformed variables."""
+    real_inv, pair_inv = inverse
+    rhs = _mix(T_INV, residual)
+    w0 = _apply(real_inv, rhs[0])
+    u = _apply(pair_inv, rhs[1] + 1j * rhs[2])
+    return -_mix(T, np.stack([w0, u.real, u.imag]))
+
+
+def _extrapolate(Z, ratio):
+    """Stage increments for the next step (length ratio·h) from the collocation
+    polynomial of the last one, u(0) = 0, u(c_i) = Z_i (G, 3, k): Hairer's start."""
+    nodes = np.array([0.0, C[0], C[1], C[2]])
+    s = 1.0 + C[None, :] * ratio[:, None]                       # (G, 3) in units of h_last
+    basis = np.ones(s.shape + (3,))
+    for j in range(1, 4):
+        for m in range(4):
+            if m != j:
+                basis[..., j - 1] *= (s - nodes[m]) / (nodes[j] - nodes[m])
+    return np.einsum("gij,jgk->igk", basis, Z) - Z[2][None]
+
+
+def _error_estimate(real_inv, mass, Yd, Z, h):
+    """Hairer's embedded error estimate (G, k) of the step (see the module docstring);
+    ``real_inv`` the inverse of γ/h·M + J."""
+    combo = (_D[0] * Z[0] + _D[1] * Z[1] + _D[2] * Z[2]) / h[:, None]
+    rhs = np.einsum("gab,gb->ga", mass, Yd + combo)
+    return _apply(real_inv, rhs)
+
+
+def _restart_rates(problem, st: BatchState, rows: np.ndarray) -> None:
+    """After a source jump: rates consistent with the new source values."""
+    full = problem.rates(st.t, st.Y, st.Yd)
+    st.Yd[rows] = full[rows]
+    st.fresh[rows] = True
+    _, Q = problem.evaluate(st.t, st.Y, st.Yd)
+    st.Q[rows] = Q[rows]
