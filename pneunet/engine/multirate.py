@@ -57,8 +57,11 @@ def transient(circuit, part: Partition, t_stop: float, t_step: float | None, t_s
     out = np.empty((times.size, dae.n))
     out[0] = y0
     alone = [c for c in part.cells if any(n in algebraic for n in c.nodes)]
-    groups = [_Group(circuit, part, ids, dae, y0, times, out, t_start, t_stop)
-              for ids in part.groups if not any(n in algebraic for n in part.cells[ids[0]].nodes)]
+    batched = [ids for ids in part.groups
+               if not any(n in algebraic for n in part.cells[ids[0]].nodes)]
+    groups = [_Group(circuit, part, chunk, dae, y0, times, out, t_start, t_stop)
+              for ids in batched for chunk in np.array_split(
+                  ids, PARALLEL_WORKERS if len(ids) >= PARALLEL_MIN_BATCH else 1)]
     stats = dict(method="multirate", cells=len(part.cells), groups=len(groups),
                  hub_nodes=len(part.hub_nodes), cells_alone=len(alone))
     count = radau.Counters()
@@ -67,13 +70,16 @@ def transient(circuit, part: Partition, t_stop: float, t_step: float | None, t_s
                                                 times, out, dae)
         count.steps += alone_steps
         stats["branch_jumps"] = jumps
-    if part.hub_nodes:
-        hub = _Hub(circuit, part, dae, y0, times, out, t_start)
-        windows = _relax(groups, hub, t_start, t_stop, opts, count)
-        stats.update(windows)
-    else:
-        for group in groups:
-            group.advance(t_stop, None, opts, count)
+    pool = _threads(groups)
+    try:
+        if part.hub_nodes:
+            hub = _Hub(circuit, part, dae, y0, times, out, t_start)
+            stats.update(_relax(groups, hub, t_start, t_stop, opts, count, pool))
+        elif groups:
+            _advance_all(groups, t_stop, None, opts, count, pool)
+    finally:
+        if pool is not None:
+            pool.shutdown()
     stats.update(steps=count.steps, rejected=count.rejected, passes=count.passes,
                  residual_calls=count.residuals, jacobian_calls=count.jacobians,
                  output_points=int(times.size), unknowns=dae.n,
@@ -121,6 +127,7 @@ class _Group:
         radau.advance(self.batch, self.state, t_end, opts.rtol, opts.atol, self.corners,
                       on_step, count)
         self.drawn = (mass, rate) if S is not None else None
+        return count
 
     def _write(self, rows, k, y, _):
         self.out[k[:, None], self.cols[rows]] = y
@@ -198,7 +205,24 @@ class _Hub:
         self.next_out[:] = next_out
 
 
-def _relax(groups, hub, t_start, t_stop, opts, count) -> dict:
+def _advance_all(groups, t_end, S, opts, count, pool):
+    """Advance every group to ``t_end`` (on ``pool``'s threads when there is one)."""
+    run = pool.map if pool is not None else map
+    for counted in run(lambda g: g.advance(t_end, S, opts, radau.Counters()), groups):
+        count.add(counted)
+
+
+def _threads(groups):
+    """A pool of threads for the groups, or None for one group: numpy's array work
+    runs outside the GIL, so two halves of a large group share both cores."""
+    if len(groups) < 2:
+        return None
+    from concurrent.futures import ThreadPoolExecutor
+
+    return ThreadPoolExecutor(min(len(groups), PARALLEL_WORKERS))
+
+
+def _relax(groups, hub, t_start, t_stop, opts, count, pool) -> dict:
     """Windowed waveform relaxation of ``groups`` and ``hub`` to ``t_stop``."""
     draw = np.zeros(len(hub.cols))
     flat = np.repeat(hub.y0, 2, axis=0)
@@ -231,7 +255,8 @@ def _relax(groups, hub, t_start, t_stop, opts, count) -> dict:
                 group.restore(snap)
                 group.batch.boundary = _values(_cubic(S, p[0][:, group.hub_cols],
                                                       p[1][:, group.hub_cols]))
-                group.advance(T + H, S, opts, count)
+            _advance_all(groups, T + H, S, opts, count, pool)
+            for group in groups:
                 mass[:, group.hub_cols] += group.drawn[0]
                 rate[:, group.hub_cols] += group.drawn[1]
             hub.restore(saved_hub)
@@ -367,6 +392,8 @@ def _run_independently(circuit, cells, single_rate, span, times, out, dae):
 _ALONE = None  # what the forked workers of _run_independently read
 PARALLEL_WORKERS = 2
 PARALLEL_MIN_CELLS = 8
+#: cells of one structure from which they are integrated in two halves on two threads
+PARALLEL_MIN_BATCH = 2000
 
 
 def _run_cells(indices):

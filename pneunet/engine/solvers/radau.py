@@ -82,6 +82,10 @@ class Counters:
     residuals: int = 0      # batched residual evaluations (one per stage)
     jacobians: int = 0      # batched Jacobian-block evaluations
 
+    def add(self, other: "Counters") -> None:
+        for f in fields(self):
+            setattr(self, f.name, getattr(self, f.name) + getattr(other, f.name))
+
 
 class Corners:
     """Each system's source corners: times (s) its steps must land on, and which of
@@ -159,8 +163,7 @@ def advance(problem, st: BatchState, t_end: float, rtol: float, atol: float,
         Z, Yd_stages, Q_stages, ok, iterations = _solve_stages(problem, st, h, newton, weights,
                                                                active, count)
         error = _error_estimate(newton[0], mass, st.Yd, Z, h)
-        err = np.maximum(wrms(error[:, diff], weights[:, diff]) if diff.any() else np.zeros(G),
-                         1e-10)
+        err = _norm(error, weights, diff)
         accepted = active & ok & (err <= 1.0)
         new_h = _next_step(st, h, err, iterations, accepted)
         new_h = np.where(ok, new_h, 0.5 * h)
@@ -309,8 +312,14 @@ def _error_estimate(real_inv, mass, Yd, Z, h):
     """Hairer's embedded error estimate (G, k) of the step (see the module docstring);
     ``real_inv`` the inverse of γ/h·M + J."""
     combo = (_D[0] * Z[0] + _D[1] * Z[1] + _D[2] * Z[2]) / h[:, None]
-    rhs = np.einsum("gab,gb->ga", mass, Yd + combo)
-    return _apply(real_inv, rhs)
+    return _apply(real_inv, _apply(mass, Yd + combo))
+
+
+def _norm(error, weights, differential):
+    """Weighted RMS norm of the error over the differential unknowns, ≥ 1e-10."""
+    if not differential.any():
+        return np.full(error.shape[0], 1e-10)
+    return np.maximum(wrms(error[:, differential], weights[:, differential]), 1e-10)
 
 
 def _restart_rates(problem, st: BatchState, rows: np.ndarray) -> None:

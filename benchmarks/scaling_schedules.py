@@ -1,0 +1,124 @@
+"""Multirate against single-rate IDA on bench_scaling's network (issue 18).
+
+Run through ``python benchmarks/bench_scaling.py --schedule independent`` (or
+``groups``).  Every cell of the network has its own PULSE control source:
+
+* ``groups``: delays staggered over 8 phase groups (bench_scaling's default);
+* ``independent``: delays uniform in 0.2–4.2 s, one per cell (seeded), so a solver
+  with one global step must resolve every cell's edges.
+
+Each run is a fresh process (peak memory = its maximum resident set), timed from
+the circuit's assembly to the solution (netlist-free: ``Circuit`` calls).  The error
+is the largest actuator or line pressure difference (kPa) on the 50 ms output grid
+against single-rate IDA at rtol = atol = 1e-8, for N ≤ ``--reference-max``.
+"""
+from __future__ import annotations
+
+import json
+import os
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+T_STOP, T_STEP = 10.0, 0.05
+
+
+def build(n, schedule, method, rtol, atol=1e-5):
+    """bench_scaling's network of ``n`` cells with the given control schedule."""
+    sys.path.insert(0, HERE)
+    import bench_scaling as bs
+    from pneunet import Circuit
+    from pneunet.waveforms import Pulse
+
+    if schedule == "groups":
+        delays = 0.25 * (np.arange(n) % bs.PHASES) + 0.2
+    else:
+        delays = np.random.default_rng(18).uniform(0.2, 4.2, n)
+    c = Circuit(f"scaling N={n} ({schedule})", rtol=rtol, atol=atol, ambient=bs.AMBIENT,
+                method=method)
+    c.pressure_source("PS", "sup", bs.P_SUPPLY)
+    c.resistor("RS", "sup", "line", R=0.3 / n)
+    c.volume("VL", "line", V=f"{20 * n}mL", p0=bs.P_SUPPLY)
+    for k, delay in enumerate(delays):
+        c.pressure_source(f"PC{k}", f"c{k}", Pulse(bs.AMBIENT, bs.P_CTRL_HIGH, delay=delay,
+                                                  rise=0.05, fall=0.05, width=2.0, period=4.0))
+        c.resistor(f"RC{k}", f"c{k}", f"ctl{k}", R=5.0)
+        c.volume(f"VC{k}", f"ctl{k}", V="10mL")
+        c.valve(f"X{k}", "line", f"act{k}", f"ctl{k}", model="axi")
+        c.volume(f"VA{k}", f"act{k}", V="50mL")
+        c.resistor(f"RV{k}", f"act{k}", "atm", R=3.0)
+    return c
+
+
+def one(n, schedule, method, rtol, atol, save):
+    """Run once in this process; print JSON (wall s, steps, peak MB); save pressures."""
+    c = build(n, schedule, method, rtol, atol)
+    t0 = time.perf_counter()
+    sol = c.tran(T_STOP, t_step=T_STEP)
+    wall = time.perf_counter() - t0
+    names = [f"act{k}" for k in range(n)] + ["line"]
+    np.save(save, np.column_stack([sol.t] + [sol.pressure(x) for x in names]))
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    print(json.dumps(dict(wall=wall, steps=int(sol.stats.get("steps", 0)), peak_mb=peak,
+                          method=sol.stats.get("method", "single"),
+                          sweeps=sol.stats.get("sweeps"), windows=sol.stats.get("windows"))))
+
+
+def measure(n, schedule, method, rtol, atol=1e-5):
+    """One run in a fresh process: its JSON record plus the saved pressures."""
+    with tempfile.TemporaryDirectory() as tmp:
+        path = os.path.join(tmp, "p.npy")
+        out = subprocess.run([sys.executable, __file__, "--one", str(n), schedule, method,
+                              repr(rtol), repr(atol), path], capture_output=True, text=True,
+                             env=dict(os.environ, PYTHONPATH=os.path.dirname(HERE)))
+        if out.returncode:
+            raise RuntimeError(out.stderr[-2000:])
+        record = json.loads(out.stdout.strip().splitlines()[-1])
+        record["pressures"] = np.load(path)
+    return record
+
+
+def error(run, ref) -> float:
+    """Largest pressure difference (kPa) on the output grid."""
+    t = run[:, 0]
+    return float(max(np.max(np.abs(run[:, j] - np.interp(t, ref[:, 0], ref[:, j])))
+                     for j in range(1, run.shape[1])))
+
+
+def study(sizes, schedule, rtol, single_max, reference_max):
+    """Print the table of issue 18 for one schedule; return its rows."""
+    print(f"{schedule} schedule, {T_STOP:g} s, rtol {rtol:g}, atol 1e-5; fresh process per run; "
+          f"error against single-rate IDA at rtol 1e-8 (N ≤ {reference_max})")
+    print(f"{'N':>6} | {'multirate s':>11} {'steps':>9} {'MB':>6} {'error kPa':>9} | "
+          f"{'single s':>9} {'steps':>7} {'MB':>6} {'error kPa':>9}")
+    rows = []
+    for n in sizes:
+        ref = measure(n, schedule, "single", 1e-8, 1e-8)["pressures"] if n <= reference_max else None
+        row = {"N": n}
+        for method in ("multirate", "single"):
+            if method == "single" and n > single_max:
+                continue
+            r = row[method] = measure(n, schedule, method, rtol)
+            r["error"] = error(r.pop("pressures"), ref) if ref is not None else np.nan
+        rows.append(row)
+        m, s = row["multirate"], row.get("single")
+        single = (f"{s['wall']:9.2f} {s['steps']:7d} {s['peak_mb']:6.0f} {s['error']:9.3f}"
+                  if s else f"{'(skipped: N > --single-max)':>34}")
+        print(f"{n:6d} | {m['wall']:11.2f} {m['steps']:9d} {m['peak_mb']:6.0f} "
+              f"{m['error']:9.3f} | {single}")
+        sys.stdout.flush()
+    walls = {r["N"]: r["multirate"]["wall"] for r in rows}
+    if 300 in walls and 3000 in walls:
+        print(f"growth exponent of the multirate time 300 → 3000: "
+              f"{np.log(walls[3000] / walls[300]) / np.log(10):.2f} (target ≤ 1.15)")
+    return rows
+
+
+if __name__ == "__main__" and sys.argv[1:2] == ["--one"]:
+    n, schedule, method, rtol, atol, save = sys.argv[2:8]
+    one(int(n), schedule, method, float(rtol), float(atol), save)
