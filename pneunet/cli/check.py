@@ -31,6 +31,10 @@ def main(args) -> int:
     print(summary(deck.circuit, args.verbose))
     analyses = ", ".join(f".{a.kind}" for a in deck.analyses) or "none"
     print(f"  analyses: {analyses}")
+    if any(a.kind == "tran" for a in deck.analyses):
+        from ..engine.simulate import transient_method
+
+        print(f"  transient: {transient_method(deck.circuit)}")
     if deck.steps:
         print("  steps: " + " x ".join(f"{s.param} ({len(s.values)})" for s in deck.steps))
     if deck.measures:

@@ -248,6 +248,20 @@ def _partition_for(circuit, dae, backend):
     return part
 
 
+def transient_method(circuit) -> str:
+    """Which integration a transient of ``circuit`` uses, in one line (``pneunet check``)."""
+    dae = CircuitDAE(circuit)
+    try:
+        part = _partition_for(circuit, dae, None)
+    except ParameterError as err:
+        return f"multirate impossible: {err.message}"
+    if part is None:
+        return f"single-rate IDA ({dae.n} unknowns, method={circuit.options.method})"
+    hub = ", ".join(part.hub_nodes[:3]) + (" …" if len(part.hub_nodes) > 3 else "")
+    return (f"multirate: {len(part.cells)} cells in {len(part.groups)} group(s)"
+            + (f", hub nodes {hub}" if part.hub_nodes else ", no hub (independent cells)"))
+
+
 def _single_rate(circuit, t_stop, t_step, t_start):
     """One independent cell (a circuit of its own) on the single-rate integrator."""
     circuit.options = circuit.options.replace(method="single")
