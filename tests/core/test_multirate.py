@@ -1,0 +1,411 @@
+"""The multirate transient (issue 18): partition, batched Radau cells, hub coupling.
+
+Every check compares with something computed independently of the multirate engine:
+a hand-written cell ODE integrated by scipy's Radau, the single-rate IDA path at tight
+tolerances, a mass balance, or single-oscillator runs.
+"""
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.integrate import cumulative_trapezoid, solve_ivp
+
+from pneunet import Circuit
+from pneunet.errors import NetlistError, ParameterError, TopologyError
+from pneunet.netlist import parse_netlist
+from pneunet.waveforms import Pulse
+
+ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT / "benchmarks"))
+import bench_scaling  # noqa: E402
+
+AMB = 101.325
+
+
+def at(sol, ref, node):
+    """``ref``'s pressure of ``node`` on ``sol``'s time points (single-rate runs store
+    the output grid and the source corners, so every grid point is one of theirs)."""
+    return np.interp(sol.t, ref.t, ref.pressure(node))
+
+
+def upward_crossings(t, x, level):
+    i = np.flatnonzero((x[:-1] < level) & (x[1:] >= level))
+    return t[i] + (level - x[i]) / (x[i + 1] - x[i]) * (t[i + 1] - t[i])
+
+
+def periods(t, p, settle=10.0):
+    late = t > settle
+    level = 0.5 * (p[late].min() + p[late].max())
+    return np.diff(upward_crossings(t[late], p[late], level))
+
+
+# -- 1. batched Radau on independent cells against a hand-written reference ----------------
+N_RC, T_RC, RTOL_RC = 20, 1.6, 1e-6
+K = np.arange(N_RC)
+DELAY, RISE, WIDTH, FALL = 0.1 + 0.037 * K, 0.02 + 0.001 * K, 0.5 - 0.01 * K, 0.03 + 0 * K
+R_IN, R_OUT, VOL = 0.5 + 0.1 * K, 1.0 + 0.05 * K, 5.0 + K       # kPa·s/mg, kPa·s/mg, mL
+P_HIGH = 400.0
+
+
+def rc_circuit(method="multirate"):
+    """N_RC cells on ideal sources: PULSE → resistor → volume → resistor → atm."""
+    c = Circuit("rc cells", rtol=RTOL_RC, atol=RTOL_RC, ambient=AMB, method=method)
+    for k in range(N_RC):
+        c.pressure_source(f"PS{k}", f"s{k}", Pulse(AMB, P_HIGH, delay=DELAY[k], rise=RISE[k],
+                                                 width=WIDTH[k], fall=FALL[k]))
+        c.resistor(f"RA{k}", f"s{k}", f"n{k}", R=R_IN[k])
+        c.volume(f"V{k}", f"n{k}", V=f"{VOL[k]}mL")
+        c.resistor(f"RB{k}", f"n{k}", "atm", R=R_OUT[k])
+    return c
+
+
+def rc_corners():
+    """Each cell's PULSE corners (s), (N_RC, 4)."""
+    return np.column_stack([DELAY, DELAY + RISE, DELAY + RISE + WIDTH,
+                            DELAY + RISE + WIDTH + FALL])
+
+
+def rc_reference(times, options):
+    """The cells' pressures on ``times``: C·ṗ = sr(ps² − p²)/R_in − sr(p² − p_amb²)/R_out,
+    sr(d) = d/(d² + ε²)^¼ (docs/model.md), integrated by scipy's Radau at 1e-10,
+    restarted at every corner of every cell."""
+    eps = options.flow_band
+    cap = options.gas_model.capacitance(VOL, options.temperature)       # mg/kPa
+
+    def source(t):
+        up = (t - DELAY) / RISE
+        down = (DELAY + RISE + WIDTH + FALL - t) / FALL
+        return AMB + (P_HIGH - AMB) * np.clip(np.minimum(up, down), 0.0, 1.0)
+
+    def sr(d):
+        return d / (d * d + eps * eps) ** 0.25
+
+    def dsr(d):
+        s = d * d + eps * eps
+        return (0.5 * d * d + eps * eps) / (s * s ** 0.25)
+
+    def f(t, p):
+        ps = source(t)
+        return (sr(ps * ps - p * p) / R_IN - sr(p * p - AMB * AMB) / R_OUT) / cap
+
+    def jac(t, p):
+        ps = source(t)
+        return np.diag((-2 * p * dsr(ps * ps - p * p) / R_IN
+                        - 2 * p * dsr(p * p - AMB * AMB) / R_OUT) / cap)
+
+    stops = np.unique(np.concatenate([[times[0], times[-1]], rc_corners().ravel()]))
+    out = np.empty((times.size, N_RC))
+    out[0] = y = np.full(N_RC, AMB)
+    for a, b in zip(stops[:-1], stops[1:]):
+        r = solve_ivp(f, (a, b), y, method="Radau", rtol=1e-10, atol=1e-10, jac=jac,
+                      dense_output=True)
+        assert r.success
+        y = r.y[:, -1]
+        inside = (times > a) & (times <= b)
+        out[inside] = r.sol(times[inside]).T
+    return out
+
+
+@pytest.fixture(scope="module")
+def rc_runs():
+    circuit = rc_circuit()
+    sol = circuit.tran(T_RC, t_step=1e-3)
+    got = np.column_stack([sol.pressure(f"n{k}") for k in range(N_RC)])
+    return sol, got, rc_reference(sol.t, circuit.options)
+
+
+def tolerance_units(got, ref, rtol=RTOL_RC, atol=RTOL_RC):
+    return np.abs(got - ref) / (rtol * np.abs(ref) + atol)
+
+
+def test_batched_radau_cells_match_an_independent_reference(rc_runs):
+    sol, got, ref = rc_runs
+    assert sol.stats["method"] == "multirate"
+    assert sol.stats["cells"] == N_RC and sol.stats["groups"] == 1
+    assert sol.stats["hub_nodes"] == 0 and sol.stats["cells_alone"] == 0
+    assert ref.max() > 300.0                           # every cell was charged
+    # IDA's local error test in IDA's norm: the global error stays within a few tolerances
+    # (single-rate IDA at the same rtol is off by 7–90 of them on this circuit)
+    assert tolerance_units(got, ref).max() < 5.0
+
+
+def test_every_cell_lands_on_its_own_source_corners(rc_runs):
+    sol, got, ref = rc_runs
+    corners = rc_corners()
+    rows = np.array([[np.argmin(np.abs(sol.t - c)) for c in cell] for cell in corners])
+    assert np.abs(sol.t[rows] - corners).max() < 1e-12   # the corners are output points
+    at_corners = tolerance_units(got[rows, K[:, None]], ref[rows, K[:, None]])
+    # a step across a corner (e.g. one cell's corners used for all, or none) is off by
+    # thousands of tolerances there; landing on it keeps the kink exact
+    assert at_corners.max() < 5.0
+
+
+# -- 2. cells coupled through a hub, each with its own schedule ------------------------------
+def independent_cells(n, rtol, method, seed=3):
+    """bench_scaling.build(n) with every cell's PULSE delay drawn on its own."""
+    delays = 0.2 + np.random.default_rng(seed).uniform(0.0, 3.0, n)
+    c = Circuit(f"hub N={n}", rtol=rtol, atol=rtol, ambient=AMB, method=method)
+    c.pressure_source("PS", "sup", bench_scaling.P_SUPPLY)
+    c.resistor("RS", "sup", "line", R=0.3 / n)
+    c.volume("VL", "line", V=f"{20 * n}mL", p0=bench_scaling.P_SUPPLY)
+    for k in range(n):
+        c.pressure_source(f"PC{k}", f"c{k}", Pulse(AMB, bench_scaling.P_CTRL_HIGH,
+                                                  delay=delays[k], rise=0.05, fall=0.05,
+                                                  width=2.0, period=4.0))
+        c.resistor(f"RC{k}", f"c{k}", f"ctl{k}", R=5.0)
+        c.volume(f"VC{k}", f"ctl{k}", V="10mL")
+        c.valve(f"X{k}", "line", f"act{k}", f"ctl{k}", model="axi")
+        c.volume(f"VA{k}", f"act{k}", V="50mL")
+        c.resistor(f"RV{k}", f"act{k}", "atm", R=3.0)
+    return c
+
+
+def test_cells_coupled_through_the_supply_line_match_single_rate():
+    n = 20
+    ref = independent_cells(n, 1e-8, "single").tran(4.0, t_step=0.01)
+    sol = independent_cells(n, 1e-6, "multirate").tran(4.0, t_step=0.01)
+    stats = sol.stats
+    assert stats["method"] == "multirate" and stats["cells"] == n and stats["hub_nodes"] == 1
+    assert stats["windows"] >= 1 and stats["sweeps"] >= stats["windows"]
+    assert np.isfinite(stats["coupling_defect"])
+    line = np.abs(sol.pressure("line") - at(sol, ref, "line")).max()
+    acts = max(np.abs(sol.pressure(f"act{k}") - at(sol, ref, f"act{k}")).max() for k in range(n))
+    assert line <= 0.1 and acts <= 0.1
+    # the cells really switch and draw from the line
+    assert max(np.ptp(ref.pressure(f"act{k}")) for k in range(n)) > 100.0
+    assert np.ptp(ref.pressure("line")) > 1.0
+
+
+# -- 3. mass through the hub ----------------------------------------------------------------
+N_CLOSED = 20
+V_HUB = 2000.0
+V_ACT = 20.0 + 3.0 * np.arange(N_CLOSED)
+
+
+def closed_network(method="multirate", rtol=1e-6, leak=True):
+    """A charged hub volume feeding closed actuator volumes through valves (no supply,
+    no vents); the valves' control lines are pinned PULSEs through RC filters.
+    ``leak``: a 1e6 kPa·s/mg leak from the hub to atm (~1e-7 of the gas in 3 s)."""
+    c = Circuit("closed hub", rtol=rtol, atol=rtol, ambient=AMB, method=method)
+    c.volume("VH", "hub", V=f"{V_HUB}mL", p0=400.0)
+    if leak:
+        c.resistor("RL", "hub", "atm", R=1e6)
+    for k in range(N_CLOSED):
+        c.pressure_source(f"PC{k}", f"c{k}", Pulse(AMB, 400.0, delay=0.1 + 0.07 * k,
+                                                  rise=0.05, fall=0.05, width=0.6))
+        c.resistor(f"RC{k}", f"c{k}", f"ctl{k}", R=5.0)
+        c.volume(f"VC{k}", f"ctl{k}", V="10mL")
+        c.valve(f"X{k}", "hub", f"act{k}", f"ctl{k}", model="axi")
+        c.volume(f"VA{k}", f"act{k}", V=f"{V_ACT[k]}mL")
+    return c
+
+
+def gas_ledger(circuit, sol):
+    """Gas in the hub and actuators plus what leaked (mg), on sol.t."""
+    o = circuit.options
+    cap = lambda v: o.gas_model.capacitance(v, o.temperature)  # noqa: E731
+    mass = cap(V_HUB) * sol.pressure("hub")
+    mass = mass + sum(cap(V_ACT[k]) * sol.pressure(f"act{k}") for k in range(N_CLOSED))
+    leaked = cumulative_trapezoid(sol.signals["mdot_RL"], sol.t, initial=0.0)
+    return mass + leaked
+
+
+@pytest.fixture(scope="module")
+def closed_run():
+    circuit = closed_network()
+    sol = circuit.tran(3.0, t_step=0.01)
+    return sol, gas_ledger(circuit, sol), circuit.options
+
+
+def test_the_hub_gives_the_cells_their_gas(closed_run):
+    sol, ledger, o = closed_run
+    assert sol.stats["method"] == "multirate" and sol.stats["hub_nodes"] == 1
+    assert sol.stats["windows"] >= 1
+    # the actuators took ~2 % of the hub's gas (~260 mg): a draw not applied to the hub,
+    # or applied twice, breaks the balance by that much
+    assert 400.0 - sol.pressure("hub")[-1] > 5.0
+    gained = sum(o.gas_model.capacitance(V_ACT[k], o.temperature)
+                 * (sol.pressure(f"act{k}")[-1] - AMB) for k in range(N_CLOSED))
+    assert gained > 100.0
+    assert abs(ledger[-1] - ledger[0]) <= 1e-5 * ledger[0]
+
+
+@pytest.mark.xfail(strict=True, reason="multirate bug: the hub's Radau steps do not land on "
+                   "the sample times (its quadrature of the piecewise-cubic draw is inexact) "
+                   "and the linearised draw-slope correction is drawn by the hub only: "
+                   "~3e-6 of the gas is lost by t = 3 s at rtol 1e-6")
+def test_mass_through_the_hub_is_conserved_to_roundoff_at_the_end(closed_run):
+    _, ledger, _ = closed_run
+    assert abs(ledger[-1] - ledger[0]) <= 1e-7 * ledger[0]
+
+
+@pytest.mark.xfail(strict=True, reason="multirate bug: between the window's hub samples the "
+                   "hub integrates a cubic fit of the cells' draw, not what they drew: the "
+                   "gas ledger is off by ~2e-4 (2 mg) inside windows at rtol 1e-6")
+def test_mass_through_the_hub_is_conserved_at_every_output_point(closed_run):
+    _, ledger, _ = closed_run
+    assert np.abs(ledger - ledger[0]).max() <= 1e-6 * ledger[0]
+
+
+@pytest.mark.xfail(strict=True, raises=TopologyError,
+                   reason="multirate bug: the hub alone (a volume, no source or reference) "
+                   "fails the sub-circuit's topology check 'no node has a defined pressure'")
+def test_a_hub_that_is_only_a_volume_can_be_integrated():
+    circuit = closed_network(leak=False)
+    sol = circuit.tran(0.5, t_step=0.01)
+    assert sol.stats["method"] == "multirate"
+
+
+# -- 4. independent oscillators: folds inside cells -----------------------------------------
+OSC_VOLUMES = [100 + 20 * i for i in range(6)]   # periods 3.0–5.9 s
+OSCILLATORS = """* six oscillators of different tanks on one ideal supply
+.options ambient=96kPa method=multirate
+.param Rf=0.566 Rout={2*Rf} Rvent=3
+.subckt OSC supply tank V=200
+X1 supply out tank axi_0p6mm
+Rout out tank {Rout}kPa*s/mg
+Vtank tank {V}mL
+Rvent tank atm {Rvent}kPa*s/mg
+.ends OSC
+PH supply 496kPa
+Xosc[0:5] supply tank[0:5] OSC V={100 + 20*index}
+.tran 10ms 30s
+"""
+
+
+def test_independent_oscillators_keep_the_periods_of_single_runs(monkeypatch):
+    from pneunet.engine import multirate
+
+    monkeypatch.setattr(multirate, "PARALLEL_MIN_CELLS", 2)   # the two-process path
+    sol = parse_netlist(OSCILLATORS).circuit.tran(30.0, t_step=0.01)
+    assert sol.stats["method"] == "multirate"
+    assert sol.stats["cells"] == 6 and sol.stats["cells_alone"] == 6
+    assert sol.stats["branch_jumps"] > 6 * 5                # fold jumps inside the cells
+    single = (ROOT / "netlists" / "oscillator.pn").read_text()
+    assert "Vtank tank 200mL" in single
+    means = []
+    for i, volume in enumerate(OSC_VOLUMES):
+        circuit = parse_netlist(single.replace("Vtank tank 200mL", f"Vtank tank {volume}mL")).circuit
+        circuit.options = circuit.options.replace(method="single")
+        ref = circuit.tran(30.0, t_step=0.01)
+        expected = periods(ref.t, ref.pressure("tank"), settle=8.0)
+        got = periods(sol.t, sol.pressure(f"tank[{i}]"), settle=8.0)
+        assert got.size == expected.size >= 2
+        assert abs(got.mean() / expected.mean() - 1.0) <= 1e-3
+        means.append(got.mean())
+    assert np.all(np.diff(means) > 0.3)     # each tank's own period, in the netlist's order
+
+
+# -- 5. method selection and errors ---------------------------------------------------------
+def test_an_unknown_method_is_an_error_naming_the_option():
+    with pytest.raises(ParameterError, match=r"method.*'bogus'"):
+        Circuit("t", method="bogus")
+    with pytest.raises(NetlistError, match=r":2:1: unknown method 'bogus'"):
+        parse_netlist("* t\n.options method=bogus\nPS s 200kPa\nR1 s a 1kPa*s/mg\nV1 a 10mL\n")
+
+
+def line_without_volume(method="multirate"):
+    lines = ["* cells on a line without a volume", f".options method={method}",
+             "PS sup 496kPa", "RS sup line 0.01kPa*s/mg"]
+    for k in range(20):
+        lines += [f"R{k} line a{k} 1kPa*s/mg", f"V{k} a{k} 10mL", f"RV{k} a{k} atm 3kPa*s/mg"]
+    return "\n".join(lines + [".tran 10ms 1s"]) + "\n"
+
+
+def cells_without_volume():
+    lines = ["* cells without a volume on a line", ".options method=multirate",
+             "PS sup 496kPa", "RS sup line 0.01kPa*s/mg", "VL line 100mL"]
+    for k in range(20):
+        lines += [f"R{k} line a{k} 1kPa*s/mg", f"RV{k} a{k} atm 3kPa*s/mg"]
+    return "\n".join(lines + [".tran 10ms 1s"]) + "\n"
+
+
+def test_multirate_on_a_circuit_it_cannot_split_is_a_parameter_error():
+    with pytest.raises(ParameterError, match="cannot split this circuit: hub node line has no volume"):
+        parse_netlist(line_without_volume()).circuit.tran(0.1)
+    with pytest.raises(ParameterError, match="node a0 has no volume"):
+        parse_netlist(cells_without_volume()).circuit.tran(0.1)
+    # the same circuit runs single-rate
+    sol = parse_netlist(line_without_volume("single")).circuit.tran(0.1)
+    assert "windows" not in sol.stats and np.isfinite(sol.pressure("line")).all()
+
+
+@pytest.mark.parametrize("netlist, message", [
+    (line_without_volume(), "hub node line has no volume"),
+    (cells_without_volume(), "node a0 has no volume"),
+], ids=["hub-without-volume", "cell-without-volume"])
+def test_cli_says_once_why_multirate_cannot_split_and_exits_2(tmp_path, netlist, message):
+    deck = tmp_path / "deck.pn"
+    deck.write_text(netlist)
+    out = subprocess.run([sys.executable, "-m", "pneunet", "run", "--no-progress",
+                          "-o", str(tmp_path / "out"), str(deck)],
+                         capture_output=True, text=True, timeout=60)
+    assert out.returncode == 2
+    text = out.stdout + out.stderr
+    assert "Traceback" not in text
+    assert text.count(message) == 1 and text.count("error:") == 1
+    assert "method=multirate cannot split this circuit" in out.stderr
+    assert "method=single" in out.stderr                     # the hint
+
+
+def test_auto_keeps_small_circuits_single_rate():
+    sol = rc_circuit(method="auto").tran(0.3, t_step=0.01)
+    assert sol.stats.get("method") != "multirate" and "windows" not in sol.stats
+    sol = rc_circuit(method="multirate").tran(0.3, t_step=0.01)
+    assert sol.stats["method"] == "multirate"
+
+
+def test_auto_partitions_from_2000_unknowns_and_64_cells():
+    from pneunet.engine.simulate import transient_method
+
+    assert transient_method(bench_scaling.build(1000)).startswith(
+        "multirate: 1000 cells in 1 group(s), hub nodes line")
+    assert transient_method(bench_scaling.build(999)).startswith("single-rate IDA (1999 unknowns")
+    forced = bench_scaling.build(40)
+    forced.options = forced.options.replace(method="multirate")
+    assert transient_method(forced).startswith("multirate: 40 cells")
+
+
+# -- 6. partition ---------------------------------------------------------------------------
+def test_partition_of_the_scaling_network():
+    from pneunet.engine.partition import partition
+
+    part = partition(bench_scaling.build(40))
+    assert part.hub_nodes == ["line"]
+    assert part.hub_elements == ["RS", "VL"] and part.hub_sources == ["PS"]
+    assert len(part.cells) == 40 and part.groups == [list(range(40))]
+    for k, cell in enumerate(part.cells):
+        assert cell.nodes == [f"ctl{k}", f"act{k}"]
+        assert cell.elements == [f"RC{k}", f"VC{k}", f"X{k}", f"VA{k}", f"RV{k}"]
+        assert cell.hub_nodes == ["line"] and cell.sources == [f"PC{k}"]
+    assert part.largest_cell == 2
+
+
+def test_cells_of_another_structure_form_another_group():
+    from pneunet.engine.partition import partition
+
+    c = bench_scaling.build(20)
+    for k in range(5):                                  # five cells without a vent
+        del c.elements[f"RV{k}"]
+    part = partition(c)
+    assert len(part.cells) == 20
+    assert sorted(map(sorted, part.groups)) == [list(range(5)), list(range(5, 20))]
+
+
+def test_worth_partitioning_says_why_not():
+    from pneunet.engine.partition import partition, worth_partitioning
+
+    small = bench_scaling.build(10)          # the line has 12 ports: no hub, one cell
+    part = partition(small)
+    assert part.hub_nodes == [] and len(part.cells) == 1
+    assert worth_partitioning(part, set()) == "1 cells (fewer than 64)"
+    part = partition(small, hub_degree=8)
+    assert part.hub_nodes == ["line"] and len(part.cells) == 10
+    assert worth_partitioning(part, set()) == "10 cells (fewer than 64)"
+    assert worth_partitioning(partition(bench_scaling.build(64)), set()) == ""
+    assert "hub node line has no volume" in worth_partitioning(partition(bench_scaling.build(64)),
+                                                               {"line"})
