@@ -36,8 +36,9 @@ class _FamilyBlock:
 class CircuitDAE:
     """The residual, Jacobian and bookkeeping of one circuit (immutable once built)."""
 
-    def __init__(self, circuit):
-        circuit.validate()
+    def __init__(self, circuit, validate: bool = True):
+        if validate:  # a part of a validated circuit (a multirate cell) may not stand alone
+            circuit.validate()
         self.circuit = circuit
         self.options = circuit.options
         context = FamilyContext(circuit.options)

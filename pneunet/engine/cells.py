@@ -56,7 +56,7 @@ class CellBatch:
         for name in hub_nodes:
             if name in circuit.initial:
                 sub.initial[name] = circuit.initial[name]
-        self.dae = dae = CircuitDAE(sub)
+        self.dae = dae = CircuitDAE(sub, validate=False)
         self.G, self.k = len(cells), len(cells[0].nodes)
         #: (G, k) indices of each cell's unknowns in the batch DAE
         self.idx = np.array([[dae.node_index(n) for n in c.nodes] for c in cells], dtype=int)

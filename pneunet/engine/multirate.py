@@ -6,17 +6,20 @@ by :mod:`~pneunet.engine.solvers.radau`, every cell with its own time step, erro
 test and source corners, so a cell switching at its own time costs steps in that
 cell only.  Cells and hub are coupled by windowed waveform relaxation:
 
-1. over a window [T, T + H] the hub pressures are given at M + 1 sample times
-   (first: extrapolated from T), linear between samples;
+1. over a window [T, T + H] the hub pressures are given at sample times (at least
+   :data:`SAMPLES`, one per step of the hub, and the output times), cubic Hermite
+   between them (first sweep: extrapolated from T);
 2. all cells are integrated across the window against them, and the mass each
-   cell draws from each hub node is integrated with the method's own weights
-   (so the hub loses exactly what the cells gain);
-3. the hub is integrated across the window with those masses drawn at constant
-   rate over each sample interval;
-4. if the hub's new samples differ from those the cells saw by at most the local
-   tolerance (weighted norm ≤ 1, weights 1/(rtol·|p| + atol)) the window is
-   accepted, else steps 2–4 repeat with the new samples; after
-   :data:`MAX_SWEEPS` the window is halved.  H grows while one or two sweeps suffice.
+   cell draws from each hub node is integrated with the method's own weights;
+3. the hub is integrated across the window, its steps landing on the samples, with
+   the draw the cubic through the drawn masses gives, plus the draw's sensitivity to
+   the hub pressure times the difference from what the cells saw (Newton-type);
+4. if the hub's new samples differ from those the cells saw by at most
+   :data:`COUPLING_TOL` local tolerances (weighted norm, weights 1/(rtol·|p| + atol))
+   and so does a rerun of the hub with the cells' draw alone (so that the hub loses
+   exactly what the cells gain), the window is accepted; else steps 2–4 repeat with
+   the new samples; after :data:`MAX_SWEEPS` the window is halved.  H grows while
+   one or two sweeps suffice.
 
 Every cell meets IDA's local error test in IDA's norm; the coupling error is
 bounded by the same tolerance at every sample.  Cells with algebraic nodes and no
@@ -36,10 +39,10 @@ from .solution import Solution, build_solution
 from .solvers import radau
 from ..workers import process_pool
 
-SAMPLES = 8          # hub sample intervals per window: at least,
-MAX_SAMPLES = 256    # at most; else one per step of the hub
+SAMPLES = 8         # hub sample intervals per window: at least,
+MAX_SAMPLES = 64     # at most; else one per step of the hub (once it has taken one)
 MAX_SWEEPS = 6       # waveform-relaxation sweeps before a window is halved
-COUPLING_TOL = 10   # accepted hub-sample change between sweeps, in local tolerances
+COUPLING_TOL = 30   # accepted hub-sample change between sweeps, in local tolerances
 DEFAULT_OUTPUTS = 1000
 
 
@@ -150,7 +153,7 @@ class _Hub:
         self.batch = CellBatch(circuit, [cell], hub_nodes=part.hub_nodes, title="hub")
         self.cols = np.array([dae.node_index(n) for n in cell.nodes])
         corners, jumps = _cell_corners(circuit, [cell], t_start, times[-1])
-        self.corners = radau.Corners(corners, jumps)
+        self.own_corners, self.own_jumps = corners[0], jumps[0]
         self.times, self.out = times, out
         self.next_out = np.ones(1, dtype=int)
         self.y0, self.t_start = y0[self.cols][None, :], t_start
@@ -174,21 +177,24 @@ class _Hub:
         return (rate + self.slope * (Y - self._seen(t)[0]),
                 np.broadcast_to(self.slope, Y.shape))
 
-    def advance(self, S, drawn, seen, slope, opts, count):
+    def advance(self, S, land, drawn, seen, slope, opts, count):
         """Integrate across the window ``S`` with the cells' draw ``drawn`` (mass and
         rate at S) by cells that saw hub pressures ``seen`` (value and slope at S) and
-        whose draw grows by ``slope`` (n_hub,) mg/(s·kPa) per kPa of hub pressure;
-        return the hub's pressures and their rates at S (M + 1, n_hub) each."""
+        whose draw grows by ``slope`` (n_hub,) mg/(s·kPa) per kPa of hub pressure,
+        landing on the times ``land``; return the hub's pressures and their rates at S
+        (M + 1, n_hub) each."""
         self._draw, self._seen, self.slope = _cubic(S, *drawn), _cubic(S, *seen), slope
         values, rates = np.empty((S.size, self.batch.k)), np.empty((S.size, self.batch.k))
         values[0], rates[0] = self.state.Y[0], self.state.Yd[0]
         next_sample = np.ones(1, dtype=int)
+        inside = (self.own_corners > S[0]) & (self.own_corners < S[-1])
+        corners = radau.Corners([np.union1d(land, self.own_corners[inside])], [self.own_jumps])
 
         def on_step(rows, before, after):
             _record(self.times, self.next_out, rows, before, after, self._write)
             _record(S, next_sample, rows, before, after,
                     lambda r, k, y, d: (values.__setitem__(k, y), rates.__setitem__(k, d)))
-        radau.advance(self.batch, self.state, S[-1], opts.rtol, opts.atol, self.corners,
+        radau.advance(self.batch, self.state, S[-1], opts.rtol, opts.atol, corners,
                       on_step, count)
         return values, rates
 
@@ -196,13 +202,10 @@ class _Hub:
         self.out[k[:, None], self.cols[None, :]] = y
 
     def snapshot(self):
-        return self.state.copy(), self.corners.next.copy(), self.next_out.copy()
+        return self.state.copy(), self.next_out.copy()
 
     def restore(self, saved):
-        state, corners, next_out = saved
-        self.state = state.copy()
-        self.corners.next[:] = corners
-        self.next_out[:] = next_out
+        self.state, self.next_out = saved[0].copy(), saved[1].copy()
 
 
 def _advance_all(groups, t_end, S, opts, count, pool):
@@ -240,9 +243,15 @@ def _relax(groups, hub, t_start, t_stop, opts, count, pool) -> dict:
         H = min(H, t_stop - T)
         if t_stop - T - H < 0.2 * H:
             H = t_stop - T
-        m = int(np.clip(np.ceil(H / hub.state.h[0]), SAMPLES, MAX_SAMPLES))
+        m = SAMPLES if hub.state.fresh[0] else int(np.clip(np.ceil(H / hub.state.h[0]),
+                                                            SAMPLES, MAX_SAMPLES))
         S = T + H * np.arange(m + 1) / m
         S[-1] = T + H
+        land = S[1:-1]  # the hub's steps land here: its integral of the draw is exact
+        # the output times inside are samples of the draw too
+        outputs = hub.times[(hub.times > T) & (hub.times < T + H)]
+        S = np.union1d(S, outputs[np.min(np.abs(outputs[:, None] - S[None, :]), axis=1)
+                                  > 1e-9 * H]) if outputs.size else S
         p = (hub.state.Y[0] + (S - T)[:, None] * hub.state.Yd[0],
              np.repeat(hub.state.Yd, S.size, axis=0))
         saved = [g.snapshot() for g in groups]
@@ -260,11 +269,16 @@ def _relax(groups, hub, t_start, t_stop, opts, count, pool) -> dict:
                 mass[:, group.hub_cols] += group.drawn[0]
                 rate[:, group.hub_cols] += group.drawn[1]
             hub.restore(saved_hub)
-            new = hub.advance(S, (mass, rate), p, slope, opts, count)
-            change = float(np.max(np.abs(new[0] - p[0]) / (opts.rtol * np.abs(new[0]) + opts.atol)))
-            p = new
+            new = hub.advance(S, land, (mass, rate), p, slope, opts, count)
+            change = _change(new, p, opts)
             if change <= COUPLING_TOL:
-                break
+                # accept only the hub that draws exactly what the cells drew (no slope)
+                hub.restore(saved_hub)
+                new = hub.advance(S, land, (mass, rate), p, 0.0 * slope, opts, count)
+                change = _change(new, p, opts)
+                if change <= COUPLING_TOL:
+                    break
+            p = new
         else:
             for group, snap in zip(groups, saved):
                 group.restore(snap)
@@ -278,6 +292,11 @@ def _relax(groups, hub, t_start, t_stop, opts, count, pool) -> dict:
         H *= 2.0 if sweep <= 2 else 1.3 if sweep == 3 else 1.0 if sweep == 4 else 0.7
     return dict(windows=windows, sweeps=sweeps, window_halvings=halvings,
                 coupling_defect=worst)
+
+
+def _change(new, seen, opts) -> float:
+    """Largest change of the hub samples, in local tolerances (IDA's weights)."""
+    return float(np.max(np.abs(new[0] - seen[0]) / (opts.rtol * np.abs(new[0]) + opts.atol)))
 
 
 def _draw_slope(groups, n_hub, dp=1e-3):
@@ -393,7 +412,7 @@ _ALONE = None  # what the forked workers of _run_independently read
 PARALLEL_WORKERS = 2
 PARALLEL_MIN_CELLS = 8
 #: cells of one structure from which they are integrated in two halves on two threads
-PARALLEL_MIN_BATCH = 2000
+PARALLEL_MIN_BATCH = 5000
 
 
 def _run_cells(indices):

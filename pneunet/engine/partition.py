@@ -144,7 +144,7 @@ def time_dependent(kind: str) -> bool:
 def worth_partitioning(part: Partition, algebraic: set[str]) -> str:
     """'' if ``method=auto`` should integrate this partition by cells, else why not."""
     if len(part.cells) < AUTO_MIN_CELLS:
-        return f"{len(part.cells)} cells (fewer than {AUTO_MIN_CELLS})"
+        return f"{len(part.cells)} cell(s), fewer than {AUTO_MIN_CELLS}"
     return unsupported(part, algebraic)
 
 
