@@ -31,10 +31,10 @@ def main(args) -> int:
     print(summary(deck.circuit, args.verbose))
     analyses = ", ".join(f".{a.kind}" for a in deck.analyses) or "none"
     print(f"  analyses: {analyses}")
-    if any(a.kind == "tran" for a in deck.analyses):
+    for tran in (a for a in deck.analyses if a.kind == "tran"):
         from ..engine.simulate import transient_method
 
-        print(f"  transient: {transient_method(deck.circuit)}")
+        print(f"  transient: {transient_method(deck.circuit, (tran.t_start, tran.t_stop))}")
     if deck.steps:
         print("  steps: " + " x ".join(f"{s.param} ({len(s.values)})" for s in deck.steps))
     if deck.measures:

@@ -129,7 +129,7 @@ def transient(circuit, t_stop: float, *, t_step: float | None = None, t_start: f
     y, yp = consistent_state(dae, t_start, y0)
     if dae.n == 0:  # every node held by a source: nothing to integrate
         return _sources_only(dae, t_start, t_stop, t_step, wall)
-    part = _partition_for(circuit, dae, backend)
+    part = _partition_for(circuit, dae, backend, (t_start, t_stop))
     if part is not None:
         from .multirate import transient as multirate
 
@@ -225,15 +225,20 @@ def transient(circuit, t_stop: float, *, t_step: float | None = None, t_start: f
     return build_solution(dae, times, states, stats, tuple(record.jumps))
 
 
-#: unknowns from which ``method=auto`` looks for cells to integrate on their own steps
+#: ``method=auto`` integrates cells on their own steps from this many unknowns, when the
+#: sources switch on at least AUTO_MULTIRATE_SCHEDULES different schedules (cells that
+#: switch together are cheap for one global step)
 AUTO_MULTIRATE_UNKNOWNS = 2000
+AUTO_MULTIRATE_SCHEDULES = 32
 
 
-def _partition_for(circuit, dae, backend):
-    """The circuit's hub and cells when the multirate method integrates it, else None."""
+def _partition_for(circuit, dae, backend, span):
+    """The circuit's hub and cells when the multirate method integrates it over ``span``
+    (t_start, t_stop), else None."""
     method = circuit.options.method
-    if method == "single" or method == "auto" and (backend is not None
-                                                   or dae.n < AUTO_MULTIRATE_UNKNOWNS):
+    if method == "single" or method == "auto" and (
+            backend is not None or dae.n < AUTO_MULTIRATE_UNKNOWNS
+            or _schedules(dae, *span) < AUTO_MULTIRATE_SCHEDULES):
         return None
     from .partition import partition, unsupported, worth_partitioning
 
@@ -248,11 +253,12 @@ def _partition_for(circuit, dae, backend):
     return part
 
 
-def transient_method(circuit) -> str:
-    """Which integration a transient of ``circuit`` uses, in one line (``pneunet check``)."""
+def transient_method(circuit, span=(0.0, 1.0)) -> str:
+    """Which integration a transient of ``circuit`` over ``span`` (s) uses, in one line
+    (``pneunet check``)."""
     dae = CircuitDAE(circuit)
     try:
-        part = _partition_for(circuit, dae, None)
+        part = _partition_for(circuit, dae, None, span)
     except ParameterError as err:
         return f"multirate impossible: {err.message}"
     if part is None:
@@ -260,6 +266,16 @@ def transient_method(circuit) -> str:
     hub = ", ".join(part.hub_nodes[:3]) + (" …" if len(part.hub_nodes) > 3 else "")
     return (f"multirate: {len(part.cells)} cells in {len(part.groups)} group(s)"
             + (f", hub nodes {hub}" if part.hub_nodes else ", no hub (independent cells)"))
+
+
+def _schedules(dae, t_start, t_stop) -> float:
+    """How many different switching schedules the sources follow: their distinct corners
+    in (t_start, t_stop) over the mean number of one source's corners (0: none)."""
+    own = [len(w.breakpoints(t_start, t_stop)) for block in dae._blocks
+           for w in (s.params.get("value") for s in block.family.specs)
+           if block.family.pinned_ports and hasattr(w, "breakpoints")]
+    mean = np.mean(own) if own else 0.0
+    return dae.breakpoints(t_start, t_stop).size / mean if mean > 0 else 0.0
 
 
 def _single_rate(circuit, t_stop, t_step, t_start):

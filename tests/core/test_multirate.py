@@ -374,12 +374,18 @@ def test_auto_keeps_small_circuits_single_rate():
     assert sol.stats["method"] == "multirate"
 
 
-def test_auto_partitions_from_2000_unknowns_and_64_cells():
+def test_auto_partitions_many_cells_on_many_schedules():
     from pneunet.engine.simulate import transient_method
+    from scaling_schedules import build
 
-    assert transient_method(bench_scaling.build(1000)).startswith(
+    def method(n, schedule):
+        return transient_method(build(n, schedule, "auto", 1e-5), (0.0, 10.0))
+    # cells switching each at its own time: multirate from 2000 unknowns
+    assert method(1000, "independent").startswith(
         "multirate: 1000 cells in 1 group(s), hub nodes line")
-    assert transient_method(bench_scaling.build(999)).startswith("single-rate IDA (1999 unknowns")
+    assert method(999, "independent").startswith("single-rate IDA (1999 unknowns")
+    # cells switching together in 8 phase groups: one global step serves them all
+    assert method(1000, "groups").startswith("single-rate IDA (2001 unknowns")
     forced = bench_scaling.build(40)
     forced.options = forced.options.replace(method="multirate")
     assert transient_method(forced).startswith("multirate: 40 cells")
