@@ -37,8 +37,14 @@ class CircuitDAE:
     """The residual, Jacobian and bookkeeping of one circuit (immutable once built)."""
 
     def __init__(self, circuit, validate: bool = True):
+        from ..gcpause import collector_paused
+
         if validate:  # a part of a validated circuit (a multirate cell) may not stand alone
             circuit.validate()
+        with collector_paused():
+            self._assemble(circuit)
+
+    def _assemble(self, circuit) -> None:
         self.circuit = circuit
         self.options = circuit.options
         context = FamilyContext(circuit.options)

@@ -228,9 +228,11 @@ class Circuit:
 
     def validate(self) -> None:
         """Raise :class:`TopologyError` for a circuit that cannot be simulated."""
+        from ..gcpause import collector_paused
         from .topology import check_topology
 
-        check_topology(self)
+        with collector_paused():
+            check_topology(self)
 
     def summary(self) -> str:
         """A short human-readable description of nodes and elements."""

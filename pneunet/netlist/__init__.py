@@ -52,8 +52,11 @@ def _build(src, path, overrides, limits, include_path) -> Deck:
     from .structure import load
     from .includes import IncludePolicy
 
+    from ..gcpause import collector_paused
+
     policy = IncludePolicy.for_netlist(path, include_path)
-    return elaborate(load(src, policy, limits), overrides)
+    with collector_paused():
+        return elaborate(load(src, policy, limits), overrides)
 
 
 def print_circuit(circuit, **kw) -> str:
