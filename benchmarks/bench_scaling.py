@@ -46,16 +46,19 @@ P_CTRL_HIGH = 400.0
 
 
 # -- the network ---------------------------------------------------------------------------
-def build(n, rtol=1e-5, atol=1e-5):
+def build(n, rtol=1e-5, atol=1e-5, delays=None, method="auto"):
+    """The network of N cells; ``delays`` (n,) s: each cell's control delay (default:
+    staggered over PHASES groups)."""
     from pneunet import Circuit
     from pneunet.waveforms import Pulse
 
-    c = Circuit(f"scaling N={n}", rtol=rtol, atol=atol, ambient=AMBIENT)
+    if delays is None:
+        delays = 0.25 * (np.arange(n) % PHASES) + 0.2
+    c = Circuit(f"scaling N={n}", rtol=rtol, atol=atol, ambient=AMBIENT, method=method)
     c.pressure_source("PS", "sup", P_SUPPLY)
     c.resistor("RS", "sup", "line", R=0.3 / n)
     c.volume("VL", "line", V=f"{20 * n}mL", p0=P_SUPPLY)
-    for k in range(n):
-        delay = 0.25 * (k % PHASES) + 0.2
+    for k, delay in enumerate(delays):
         c.pressure_source(f"PC{k}", f"c{k}", Pulse(AMBIENT, P_CTRL_HIGH, delay=delay, rise=0.05,
                                                   fall=0.05, width=2.0, period=4.0))
         c.resistor(f"RC{k}", f"c{k}", f"ctl{k}", R=5.0)

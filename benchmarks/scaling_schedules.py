@@ -32,27 +32,12 @@ def build(n, schedule, method, rtol, atol=1e-5):
     """bench_scaling's network of ``n`` cells with the given control schedule."""
     sys.path.insert(0, HERE)
     import bench_scaling as bs
-    from pneunet import Circuit
-    from pneunet.waveforms import Pulse
 
-    if schedule == "groups":
-        delays = 0.25 * (np.arange(n) % bs.PHASES) + 0.2
-    else:
-        delays = np.random.default_rng(18).uniform(0.2, 4.2, n)
-    c = Circuit(f"scaling N={n} ({schedule})", rtol=rtol, atol=atol, ambient=bs.AMBIENT,
-                method=method)
-    c.pressure_source("PS", "sup", bs.P_SUPPLY)
-    c.resistor("RS", "sup", "line", R=0.3 / n)
-    c.volume("VL", "line", V=f"{20 * n}mL", p0=bs.P_SUPPLY)
-    for k, delay in enumerate(delays):
-        c.pressure_source(f"PC{k}", f"c{k}", Pulse(bs.AMBIENT, bs.P_CTRL_HIGH, delay=delay,
-                                                  rise=0.05, fall=0.05, width=2.0, period=4.0))
-        c.resistor(f"RC{k}", f"c{k}", f"ctl{k}", R=5.0)
-        c.volume(f"VC{k}", f"ctl{k}", V="10mL")
-        c.valve(f"X{k}", "line", f"act{k}", f"ctl{k}", model="axi")
-        c.volume(f"VA{k}", f"act{k}", V="50mL")
-        c.resistor(f"RV{k}", f"act{k}", "atm", R=3.0)
-    return c
+    delays = (0.25 * (np.arange(n) % bs.PHASES) + 0.2 if schedule == "groups"
+              else np.random.default_rng(18).uniform(0.2, 4.2, n))
+    circuit = bs.build(n, rtol, atol, delays=delays, method=method)
+    circuit.title = f"scaling N={n} ({schedule})"
+    return circuit
 
 
 def one(n, schedule, method, rtol, atol, save):

@@ -12,7 +12,7 @@ from pneunet import ParameterError
 from pneunet.analysis.piping import (PipingSpec, Tubing, build, cross_section, piping_study,
                                      plot_piping, with_sizes)
 
-R_AIR, T, MU = 8.314 / 28.965e-3, 293.15, 1.813e-5   # J/(kg·K), K, Pa·s
+from reference_lines import R_AIR, T, line_flow  # tests/ is on pytest's sys.path
 
 
 def test_fig1b_cross_sections_by_hand():
@@ -73,16 +73,6 @@ def _valve_flow(p_in, p_out, p_ctrl, rf=0.566, pclose=96.42, ptrans=155.1, e=1.9
     return u ** e / (rf * np.sqrt(1 + u ** (2 * e))) * np.sqrt(max(p_in ** 2 - p_out ** 2, 0.0))
 
 
-def _line_flow(p_a, p_b, dx, d):
-    """kg/s through dx m of line (Pa): laminar and Blasius blended as documented."""
-    delta = p_a ** 2 - p_b ** 2
-    lam = np.abs(delta) * np.pi * d ** 4 / (256 * MU * R_AIR * T * dx)
-    b = 64 * R_AIR * T * dx / (np.pi ** 2 * d ** 5) * 0.0791 * (4 / (np.pi * d * MU)) ** -0.25
-    turb = (np.abs(delta) / b) ** (4 / 7)
-    with np.errstate(divide="ignore"):
-        return np.where(delta == 0, 0.0, np.sign(delta) * (lam ** -4 + turb ** -4) ** -0.25)
-
-
 def test_one_power_line_fills_as_a_finite_volume_line_behind_the_valve():
     """Design "individual", one actuator: source 496 kPa → valve (control 96 kPa from t = 0)
     → 1 m of 2.5 mm line (200 nodes) → 50 mL; filled at 90 % of the gauge (456 kPa)."""
@@ -95,7 +85,7 @@ def test_one_power_line_fills_as_a_finite_volume_line_behind_the_valve():
 
     def rate(t, p):
         inflow = np.r_[_valve_flow(spec.p_supply, p[0] / 1e3, spec.ambient) * 1e-6,
-                       _line_flow(p[:-1], p[1:], dx, d)]
+                       line_flow(p[:-1], p[1:], dx, d)]
         return (inflow - np.r_[inflow[1:], 0.0]) / caps
 
     def filled(t, p):

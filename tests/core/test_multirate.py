@@ -148,20 +148,7 @@ def test_every_cell_lands_on_its_own_source_corners(rc_runs):
 def independent_cells(n, rtol, method, seed=3):
     """bench_scaling.build(n) with every cell's PULSE delay drawn on its own."""
     delays = 0.2 + np.random.default_rng(seed).uniform(0.0, 3.0, n)
-    c = Circuit(f"hub N={n}", rtol=rtol, atol=rtol, ambient=AMB, method=method)
-    c.pressure_source("PS", "sup", bench_scaling.P_SUPPLY)
-    c.resistor("RS", "sup", "line", R=0.3 / n)
-    c.volume("VL", "line", V=f"{20 * n}mL", p0=bench_scaling.P_SUPPLY)
-    for k in range(n):
-        c.pressure_source(f"PC{k}", f"c{k}", Pulse(AMB, bench_scaling.P_CTRL_HIGH,
-                                                  delay=delays[k], rise=0.05, fall=0.05,
-                                                  width=2.0, period=4.0))
-        c.resistor(f"RC{k}", f"c{k}", f"ctl{k}", R=5.0)
-        c.volume(f"VC{k}", f"ctl{k}", V="10mL")
-        c.valve(f"X{k}", "line", f"act{k}", f"ctl{k}", model="axi")
-        c.volume(f"VA{k}", f"act{k}", V="50mL")
-        c.resistor(f"RV{k}", f"act{k}", "atm", R=3.0)
-    return c
+    return bench_scaling.build(n, rtol, rtol, delays=delays, method=method)
 
 
 def test_cells_coupled_through_the_supply_line_match_single_rate():

@@ -15,10 +15,7 @@ from pneunet import Circuit, ParameterError
 from pneunet.errors import NetlistError
 from pneunet.netlist import parse_netlist, print_circuit
 from pneunet.waveforms import Step
-
-R_AIR = 8.314 / 28.965e-3   # J/(kg·K)
-T = 293.15                  # K, the default temperature
-MU = 1.813e-5               # Pa·s, air at 20 °C
+from reference_lines import MU, R_AIR, T, line_flow  # tests/ is on pytest's sys.path
 
 
 def _steady_flow(p_a, length, diameter, **kw):
@@ -169,17 +166,6 @@ def test_printed_segments_parse_back_to_the_same_line():
 AMB, SUPPLY = 96.0, 496.0  # kPa, the paper's vent and supply pressures
 
 
-def _fv_segment_flow(p_a, p_b, dx, d):
-    """kg/s through dx metres of line (Pa): the documented law, laminar and Blasius blended
-    by ṁ = (ṁ_lam⁻⁴ + ṁ_turb⁻⁴)^(−1/4)."""
-    delta = p_a ** 2 - p_b ** 2
-    lam = np.abs(delta) * np.pi * d ** 4 / (256 * MU * R_AIR * T * dx)
-    b = 64 * R_AIR * T * dx / (np.pi ** 2 * d ** 5) * 0.0791 * (4 / (np.pi * d * MU)) ** -0.25
-    turb = (np.abs(delta) / b) ** (4 / 7)
-    with np.errstate(divide="ignore"):
-        return np.where(delta == 0, 0.0, np.sign(delta) * (lam ** -4 + turb ** -4) ** -0.25)
-
-
 def _fv_fill_time(length, d, volume, level, cells=400):
     """Time (s) for a volume (m³) at the end of a line, all at AMB, to reach ``level`` (kPa)
     once the supply steps to SUPPLY: ``cells`` cells of gas (isothermal, mass per cell
@@ -189,7 +175,7 @@ def _fv_fill_time(length, d, volume, level, cells=400):
     lengths = np.r_[dx / 2, np.full(cells - 1, dx), dx / 2]  # supply→cell 1 … cell n→volume
 
     def rate(t, p):
-        inflow = _fv_segment_flow(np.r_[SUPPLY * 1e3, p[:-1]], p, lengths, d)
+        inflow = line_flow(np.r_[SUPPLY * 1e3, p[:-1]], p, lengths, d)
         return (inflow - np.r_[inflow[1:], 0.0]) / caps
 
     def reached(t, p):
