@@ -37,6 +37,7 @@ from .cells import CellBatch
 from .partition import Cell, Partition
 from .solution import Solution, build_solution
 from .solvers import radau
+from ..errors import SolverError
 from ..workers import process_pool
 
 SAMPLES = 8         # hub sample intervals per window: at least,
@@ -74,12 +75,20 @@ def transient(circuit, part: Partition, t_stop: float, t_step: float | None, t_s
         count.steps += alone_steps
         stats["branch_jumps"] = jumps
     pool = _threads(groups)
+    done = [t_start]  # the time up to which every output row is final
     try:
         if part.hub_nodes:
             hub = _Hub(circuit, part, dae, y0, times, out, t_start)
-            stats.update(_relax(groups, hub, t_start, t_stop, opts, count, pool))
+            stats.update(_relax(groups, hub, t_start, t_stop, opts, count, pool, done))
         elif groups:
             _advance_all(groups, t_stop, None, opts, count, pool)
+    except SolverError as err:
+        if not part.hub_nodes:  # each cell recorded its outputs up to where it got
+            done[0] = min([t_start] + [float(g.state.t.min()) for g in groups if g.state])
+        rows = int(np.searchsorted(times, done[0], side="right"))
+        partial = build_solution(dae, times[:rows], out[:rows].copy(), dict(stats, failed=True), ())
+        raise SolverError(err.message, time=err.time, where=err.where, hint=err.hint,
+                          partial=partial) from None
     finally:
         if pool is not None:
             pool.shutdown()
@@ -225,8 +234,9 @@ def _threads(groups):
     return ThreadPoolExecutor(min(len(groups), PARALLEL_WORKERS))
 
 
-def _relax(groups, hub, t_start, t_stop, opts, count, pool) -> dict:
-    """Windowed waveform relaxation of ``groups`` and ``hub`` to ``t_stop``."""
+def _relax(groups, hub, t_start, t_stop, opts, count, pool, done) -> dict:
+    """Windowed waveform relaxation of ``groups`` and ``hub`` to ``t_stop``; ``done[0]``
+    follows the end of the last accepted window (s)."""
     draw = np.zeros(len(hub.cols))
     flat = np.repeat(hub.y0, 2, axis=0)
     for group in groups:
@@ -288,7 +298,7 @@ def _relax(groups, hub, t_start, t_stop, opts, count, pool) -> dict:
             continue
         worst = max(worst, change)
         windows += 1
-        T = float(S[-1])
+        T = done[0] = float(S[-1])
         H *= 2.0 if sweep <= 2 else 1.3 if sweep == 3 else 1.0 if sweep == 4 else 0.7
     return dict(windows=windows, sweeps=sweeps, window_halvings=halvings,
                 coupling_defect=worst)

@@ -417,3 +417,26 @@ def test_worth_partitioning_says_why_not():
     assert worth_partitioning(partition(bench_scaling.build(64)), set()) == ""
     assert "hub node line has no volume" in worth_partitioning(partition(bench_scaling.build(64)),
                                                                {"line"})
+
+
+def test_a_failure_keeps_the_finished_windows(monkeypatch):
+    """A cell whose steps collapse mid-run: SolverError with the solution up to the last
+    accepted window (finite, ending before the failure), as single-rate failures keep theirs."""
+    from pneunet.engine.solvers import radau
+    from pneunet.errors import SolverError
+
+    real, calls = radau._check_step, {"n": 0}
+
+    def collapse_late(problem, st, active, h):
+        calls["n"] += 1
+        if st.t[active].max(initial=0.0) > 2.0 and problem.G > 1:
+            raise SolverError("the step of the cell at node act0 collapsed", time=2.0,
+                              where="node act0")
+        real(problem, st, active, h)
+    monkeypatch.setattr(radau, "_check_step", collapse_late)
+    with pytest.raises(SolverError) as caught:
+        independent_cells(20, 1e-5, "multirate").tran(4.0, t_step=0.01)
+    partial = caught.value.partial
+    assert partial is not None and partial.stats["failed"]
+    assert 0.0 < partial.t[-1] <= 2.0 + 1e-9 and partial.t[0] == 0.0
+    assert np.all(np.isfinite(partial.pressure("act0"))) and np.all(np.isfinite(partial.pressure("line")))
