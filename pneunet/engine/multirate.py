@@ -40,11 +40,14 @@ from .solvers import radau
 from ..errors import SolverError
 from ..workers import process_pool
 
-SAMPLES = 8         # hub sample intervals per window: at least,
-MAX_SAMPLES = 64     # at most; else one per step of the hub (once it has taken one)
-MAX_SWEEPS = 6       # waveform-relaxation sweeps before a window is halved
-COUPLING_TOL = 30   # accepted hub-sample change between sweeps, in local tolerances
-DEFAULT_OUTPUTS = 1000
+SAMPLES = 8                # hub sample intervals per window: at least,
+MAX_SAMPLES = 64           # at most; else one per step of the hub (once it has taken one)
+MAX_SWEEPS = 6             # waveform-relaxation sweeps before a window is halved
+COUPLING_TOL = 30          # accepted hub-sample change between sweeps, in local tolerances
+DEFAULT_OUTPUTS = 1000     # output points when the .tran gives no step
+PARALLEL_WORKERS = 2
+PARALLEL_MIN_CELLS = 8     # independent cells from which they run in worker processes
+PARALLEL_MIN_BATCH = 5000  # cells of one structure from which two threads share them
 
 
 def transient(circuit, part: Partition, t_stop: float, t_step: float | None, t_start: float,
@@ -118,7 +121,7 @@ class _Group:
         self.drawn = None
 
     def begin(self, opts):
-        if self.state is None and self.batch.differential.all():
+        if self.state is None:
             self.state = radau.start(self.batch, self.t_start, self.y0, self.span,
                                      opts.rtol, opts.atol)
 
@@ -348,6 +351,7 @@ def _cubic(S, value, slope):
 
 
 def _values(curve):
+    """The values alone of a :func:`_cubic` curve: a cell batch's boundary function."""
     return lambda t: curve(t)[0]
 
 
@@ -419,10 +423,6 @@ def _run_independently(circuit, cells, single_rate, span, times, out, dae):
 
 
 _ALONE = None  # what the forked workers of _run_independently read
-PARALLEL_WORKERS = 2
-PARALLEL_MIN_CELLS = 8
-#: cells of one structure from which they are integrated in two halves on two threads
-PARALLEL_MIN_BATCH = 5000
 
 
 def _run_cells(indices):
