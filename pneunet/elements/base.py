@@ -165,13 +165,24 @@ class ElementFamily:
             return np.empty((0, len(self.pinned_ports)))
         return np.stack([self.pinned_pressure(float(ti))[i] for i, ti in enumerate(t)])
 
+    def instance_corners(self, t_start: float, t_stop: float):
+        """Per instance: (times where an input's slope jumps, the subset where its value
+        jumps) in (t_start, t_stop), s; None for a family without time-varying inputs."""
+        return None
+
     def jumps(self, t_start: float, t_stop: float) -> np.ndarray:
         """Times where an input of this family jumps (the solver restarts there)."""
-        return np.empty(0)
+        return self._union(t_start, t_stop, 1)
 
     def breakpoints(self, t_start: float, t_stop: float) -> np.ndarray:
         """Times where an input's slope jumps (the solver steps onto them)."""
-        return np.empty(0)
+        return self._union(t_start, t_stop, 0)
+
+    def _union(self, t_start, t_stop, which):
+        corners = self.instance_corners(t_start, t_stop)
+        if not corners:
+            return np.empty(0)
+        return np.unique(np.concatenate([c[which] for c in corners]))
 
     def initial_pressure(self) -> np.ndarray:
         """Initial pressure (n,) of storage instances, NaN where not set, kPa."""

@@ -8,9 +8,10 @@ from . import register
 from .base import ElementFamily, Param
 
 
-def _waveform_times(family, method, t_start, t_stop):
-    times = [getattr(s.params["value"], method)(t_start, t_stop) for s in family.specs]
-    return np.unique(np.concatenate(times)) if times else np.empty(0)
+def _waveform_corners(family, t_start, t_stop):
+    """Each instance's waveform corners and jumps (its ``value``), s."""
+    return [(w.breakpoints(t_start, t_stop), w.jumps(t_start, t_stop))
+            for w in (s.params["value"] for s in family.specs)]
 
 
 class _WaveformBank:
@@ -90,11 +91,8 @@ class PressureSource(ElementFamily):
     def flows(self, t, p, pdot):
         return np.zeros(p.shape)
 
-    def jumps(self, t_start, t_stop):
-        return _waveform_times(self, "jumps", t_start, t_stop)
-
-    def breakpoints(self, t_start, t_stop):
-        return _waveform_times(self, "breakpoints", t_start, t_stop)
+    def instance_corners(self, t_start, t_stop):
+        return _waveform_corners(self, t_start, t_stop)
 
 
 @register
@@ -115,11 +113,8 @@ class FlowSource(ElementFamily):
         q = self._flow(t)
         return np.stack([q, -q], axis=1), np.zeros((self.n, 2, 2)), None
 
-    def jumps(self, t_start, t_stop):
-        return _waveform_times(self, "jumps", t_start, t_stop)
-
-    def breakpoints(self, t_start, t_stop):
-        return _waveform_times(self, "breakpoints", t_start, t_stop)
+    def instance_corners(self, t_start, t_stop):
+        return _waveform_corners(self, t_start, t_stop)
 
     def signals(self, t, p):
         flows = np.array([[s.params["value"].value(ti) for s in self.specs] for ti in t])

@@ -254,6 +254,16 @@ class CircuitDAE:
     def breakpoints(self, t_start, t_stop) -> np.ndarray:
         return _distinct([b.family.breakpoints(t_start, t_stop) for b in self._blocks])
 
+    def instance_corners(self, t_start, t_stop) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+        """{element name: (its input's corners, the jumps among them)} in (t_start, t_stop)
+        for every element with time-varying inputs, s."""
+        out = {}
+        for block in self._blocks:
+            corners = block.family.instance_corners(t_start, t_stop)
+            if corners:
+                out.update(zip(block.family.names, corners))
+        return out
+
     def initial_state(self, t0: float) -> np.ndarray:
         """Initial guess: ``.ic`` values, then volumes' p0, then ambient pressure (kPa)."""
         y = np.full(self.n, self.options.ambient)

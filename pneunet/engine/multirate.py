@@ -37,6 +37,7 @@ from .cells import CellBatch
 from .partition import Cell, Partition
 from .solution import Solution, build_solution
 from .solvers import radau
+from .solvers.interpolate import hermite_step
 from ..errors import SolverError
 from ..workers import process_pool
 
@@ -66,7 +67,8 @@ def transient(circuit, part: Partition, t_stop: float, t_step: float | None, t_s
     alone = [c for c in part.cells if any(n in algebraic for n in c.nodes)]
     batched = [ids for ids in part.groups
                if not any(n in algebraic for n in part.cells[ids[0]].nodes)]
-    groups = [_Group(circuit, part, chunk, dae, y0, times, out, t_start, t_stop)
+    corners = dae.instance_corners(t_start, t_stop)
+    groups = [_Group(circuit, part, chunk, dae, corners, y0, times, out, t_start, t_stop)
               for ids in batched for chunk in np.array_split(
                   ids, PARALLEL_WORKERS if len(ids) >= PARALLEL_MIN_BATCH else 1)]
     stats = dict(method="multirate", cells=len(part.cells), groups=len(groups),
@@ -81,7 +83,7 @@ def transient(circuit, part: Partition, t_stop: float, t_step: float | None, t_s
     done = [t_start]  # the time up to which every output row is final
     try:
         if part.hub_nodes:
-            hub = _Hub(circuit, part, dae, y0, times, out, t_start)
+            hub = _Hub(circuit, part, dae, corners, y0, times, out, t_start)
             stats.update(_relax(groups, hub, t_start, t_stop, opts, count, pool, done))
         elif groups:
             _advance_all(groups, t_stop, None, opts, count, pool)
@@ -106,13 +108,13 @@ def transient(circuit, part: Partition, t_stop: float, t_step: float | None, t_s
 class _Group:
     """The cells of one structure: batch, state, corners and output recorder."""
 
-    def __init__(self, circuit, part, ids, dae, y0, times, out, t_start, t_stop):
+    def __init__(self, circuit, part, ids, dae, corners, y0, times, out, t_start, t_stop):
         cells = [part.cells[i] for i in ids]
         self.cells = cells
         self.batch = CellBatch(circuit, cells)
         self.cols = np.array([[dae.node_index(n) for n in c.nodes] for c in cells], dtype=int)
         self.hub_cols = [part.hub_nodes.index(h) for h in cells[0].hub_nodes]
-        self.corners = radau.Corners(*_cell_corners(circuit, cells, t_start, t_stop))
+        self.corners = radau.Corners(*_cell_corners(corners, cells))
         self.times, self.out = times, out
         self.next_out = np.ones(len(cells), dtype=int)
         self.t_start, self.span = t_start, t_stop - t_start
@@ -160,12 +162,12 @@ class _Group:
 class _Hub:
     """The hub nodes as one system, with the cells' draw injected."""
 
-    def __init__(self, circuit, part, dae, y0, times, out, t_start):
+    def __init__(self, circuit, part, dae, corners, y0, times, out, t_start):
         cell = Cell(part.hub_elements, list(part.hub_nodes), [], list(part.hub_sources))
         self.batch = CellBatch(circuit, [cell], hub_nodes=part.hub_nodes, title="hub")
         self.cols = np.array([dae.node_index(n) for n in cell.nodes])
-        corners, jumps = _cell_corners(circuit, [cell], t_start, times[-1])
-        self.own_corners, self.own_jumps = corners[0], jumps[0]
+        own, jumps = _cell_corners(corners, [cell])
+        self.own_corners, self.own_jumps = own[0], jumps[0]
         self.times, self.out = times, out
         self.next_out = np.ones(1, dtype=int)
         self.y0, self.t_start = y0[self.cols][None, :], t_start
@@ -355,16 +357,6 @@ def _values(curve):
     return lambda t: curve(t)[0]
 
 
-def _hermite(s, h, y0, d0, y1, d1):
-    """Cubic Hermite value and slope at fractions s of steps of length h."""
-    s2, s3 = s * s, s * s * s
-    value = ((2 * s3 - 3 * s2 + 1) * y0 + (s3 - 2 * s2 + s) * h * d0
-             + (3 * s2 - 2 * s3) * y1 + (s3 - s2) * h * d1)
-    slope = ((6 * s2 - 6 * s) * (y0 - y1) / h + (3 * s2 - 4 * s + 1) * d0
-             + (3 * s2 - 2 * s) * d1)
-    return value, slope
-
-
 def _record(times, nxt, rows, before, after, write, mass=False):
     """For each step that passed one of ``times`` (shared, increasing), write the
     cubic Hermite interpolant's value and slope there; ``nxt`` is each system's next
@@ -381,22 +373,18 @@ def _record(times, nxt, rows, before, after, write, mass=False):
         r, k = rows[hit], k[hit]
         h = (t1[hit] - t0[hit])[:, None]
         s = np.clip((times[k] - t0[hit])[:, None] / h, 0.0, 1.0)
-        write(r, k, *_hermite(s, h, y0[hit], d0[hit], y1[hit], d1[hit]))
+        write(r, k, *hermite_step(s, h, y0[hit], d0[hit], y1[hit], d1[hit]))
         nxt[r] += 1
 
 
-def _cell_corners(circuit, cells, t_start, t_stop):
-    """Per cell: the corners and jumps (s) of its sources' waveforms in (t_start, t_stop)."""
+def _cell_corners(corners, cells):
+    """Per cell: the corners and jumps (s) of its elements' inputs, from ``corners``
+    (:meth:`CircuitDAE.instance_corners`)."""
     times, jumps = [], []
     for cell in cells:
-        waves = [circuit.elements[s].params["value"] for s in cell.sources
-                 if "value" in circuit.elements[s].params]
-        waves += [circuit.elements[e].params["value"] for e in cell.elements
-                  if hasattr(circuit.elements[e].params.get("value"), "breakpoints")]
-        b = [w.breakpoints(t_start, t_stop) for w in waves if hasattr(w, "breakpoints")]
-        j = [w.jumps(t_start, t_stop) for w in waves if hasattr(w, "jumps")]
-        times.append(np.unique(np.concatenate(b)) if b else np.empty(0))
-        jumps.append(np.unique(np.concatenate(j)) if j else np.empty(0))
+        own = [corners[name] for name in cell.sources + cell.elements if name in corners]
+        times.append(np.unique(np.concatenate([c[0] for c in own])) if own else np.empty(0))
+        jumps.append(np.unique(np.concatenate([c[1] for c in own])) if own else np.empty(0))
     return times, jumps
 
 

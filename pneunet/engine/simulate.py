@@ -269,11 +269,9 @@ def transient_method(circuit, span=(0.0, 1.0)) -> str:
 
 
 def _schedules(dae, t_start, t_stop) -> float:
-    """How many different switching schedules the sources follow: their distinct corners
-    in (t_start, t_stop) over the mean number of one source's corners (0: none)."""
-    own = [len(w.breakpoints(t_start, t_stop)) for block in dae._blocks
-           for w in (s.params.get("value") for s in block.family.specs)
-           if block.family.pinned_ports and hasattr(w, "breakpoints")]
+    """How many different switching schedules the inputs follow: their distinct corners
+    in (t_start, t_stop) over the mean number of one element's corners (0: none)."""
+    own = [len(c[0]) for c in dae.instance_corners(t_start, t_stop).values()]
     mean = np.mean(own) if own else 0.0
     return dae.breakpoints(t_start, t_stop).size / mean if mean > 0 else 0.0
 
