@@ -20,8 +20,6 @@ import difflib
 import os
 from typing import Any
 
-import numpy as np
-
 from .. import elements
 from ..errors import ParameterError, SourceSpan, TopologyError
 from ..elements.base import ElementSpec

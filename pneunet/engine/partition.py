@@ -16,8 +16,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-import numpy as np
-
 from .. import elements
 
 #: an unknown node with at least this many element ports is a hub candidate

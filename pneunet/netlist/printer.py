@@ -7,7 +7,7 @@ written in keyword form (``resistor X1.R1 a b R=0.5``).
 from __future__ import annotations
 
 import math
-from dataclasses import fields, is_dataclass
+from dataclasses import fields
 
 from .. import elements
 from ..engine.options import SimulationOptions

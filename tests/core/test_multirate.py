@@ -15,7 +15,7 @@ import pytest
 from scipy.integrate import cumulative_trapezoid, solve_ivp
 
 from pneunet import Circuit
-from pneunet.errors import NetlistError, ParameterError, TopologyError
+from pneunet.errors import NetlistError, ParameterError
 from pneunet.netlist import parse_netlist
 from pneunet.waveforms import Pulse
 
