@@ -6,6 +6,10 @@ diagonal, one (k, k) block per cell.  Every cell has private copies of the pinne
 nodes it touches and of the hub nodes (*boundary* nodes, their pressures given by
 the driver), so that a cell's sources and boundary can be evaluated at that cell's
 own time.  The hub itself is a batch of one cell with the cells' flows injected.
+
+A pass of the integrator only needs the cells that still step: :meth:`CellBatch.rows`
+gives an evaluator of a subset of the cells (their element instances as families of
+their own), so that the cost of a pass follows the cells that are active in it.
 """
 from __future__ import annotations
 
@@ -18,6 +22,9 @@ from ..waveforms import Constant
 from .assembly import CircuitDAE
 from .circuit import Circuit
 from .partition import time_dependent
+
+SUBSET_FRACTION = 0.75  # active share of a batch's cells below which a pass evaluates them alone
+SUBSET_MIN_CELLS = 200  # batches from which that pays (smaller ones: the fixed cost dominates)
 
 
 class CellBatch:
@@ -68,6 +75,7 @@ class CellBatch:
         self.boundary = None
         self.injection = None
         self._build_maps(cells)
+        self._view = None  # the last subset evaluator (see rows)
 
     def _build_maps(self, cells):
         dae = self.dae
@@ -97,18 +105,12 @@ class CellBatch:
         self._pos = pos
         self._data = np.zeros(dae.nnz + 1)
         self.differential = dae.differential[self.idx[0]]
+        # the cell of each instance of each family with a port at an unknown node
+        self._instance_cell = [cell_of[b.port_node].max(axis=1) for b in dae._active]
+        self._inputs = _Inputs(self._pinned, self._boundary_idx if self.nb else None)
 
     def _pressures(self, t, Y, Yd):
-        dae = self.dae
-        p, pdot = dae._p, dae._pdot
-        p[self.idx] = Y
-        pdot[self.idx] = Yd
-        for family, nodes, cell in self._pinned:
-            p[nodes] = family.pinned_pressure_each(t[cell])
-        if self.nb:
-            p[self._boundary_idx] = self.boundary(t)
-        dae._pinned_at = None  # the shared buffer no longer holds one time's pressures
-        return p, pdot
+        return self._inputs.fill(self, self.idx, t, Y, Yd)
 
     def evaluate(self, t, Y, Yd, jacobian=False):
         """R (G, k) and the boundary outflows (G, nb), mg/s; with ``jacobian`` also the
@@ -149,14 +151,145 @@ class CellBatch:
                                       minlength=nnz + 1)[:nnz]
         return self._data[self._pos]
 
+    def rows(self, active: np.ndarray):
+        """An evaluator of (at least) the cells ``active`` (sorted indices) and the cells
+        it holds, or (None, None) when the whole batch is as cheap.  A subset evaluator
+        is kept while the active cells stay within it and fill at least half of it."""
+        if self.injection is not None or self.G < SUBSET_MIN_CELLS or \
+                active.size > SUBSET_FRACTION * self.G:
+            return None, None
+        view = self._view
+        if view is None or active.size * 2 < view.rows.size or \
+                not view.holds[active].all():
+            view = self._view = _Rows(self, active)
+        return view.rows, view
+
     def rates(self, t, Y, Yd_guess):
-        """ẏ consistent with Y at times t: the mass blocks solved for −F(ẏ = guess)."""
-        res, _, _, mass = self.evaluate(t, Y, Yd_guess, jacobian=True)
-        d = self.differential
-        out = Yd_guess.copy()
-        sub = mass[:, d][:, :, d]
-        out[:, d] = Yd_guess[:, d] - np.linalg.solve(sub, res[:, d, None])[..., 0]
-        return out
+        return consistent_rates(self, t, Y, Yd_guess)
+
+
+class _Inputs:
+    """The pressures cells do not solve for — their pinned nodes (sources at each
+    cell's own time) and boundary nodes (the driver's ``boundary(t)``) — kept for the
+    last few time arrays: a Radau pass evaluates each stage time several times."""
+
+    KEEP = 4
+
+    def __init__(self, pinned, boundary_idx):
+        self.pinned, self.boundary_idx = pinned, boundary_idx
+        self._kept = []  # (times, boundary function, values), newest first
+
+    def fill(self, batch, idx, t, Y, Yd):
+        """The batch DAE's shared pressure and rate buffers with the cells' unknowns
+        ``idx`` at Y, Yd and their inputs at times t."""
+        dae = batch.dae
+        p, pdot = dae._p, dae._pdot
+        p[idx] = Y
+        pdot[idx] = Yd
+        for nodes, values in zip(self._nodes(), self._values(t, batch.boundary)):
+            p[nodes] = values
+        dae._pinned_at = None  # the shared buffer no longer holds one time's pressures
+        return p, pdot
+
+    def _nodes(self):
+        yield from (nodes for _, nodes, _ in self.pinned)
+        if self.boundary_idx is not None:
+            yield self.boundary_idx
+
+    def _values(self, t, boundary):
+        for times, fn, values in self._kept:
+            if fn is boundary and times.shape == t.shape and np.array_equal(times, t):
+                return values
+        values = [family.pinned_pressure_each(t[cell]) for family, _, cell in self.pinned]
+        if self.boundary_idx is not None:
+            values.append(boundary(t))
+        self._kept = [(t.copy(), boundary, values)] + self._kept[:self.KEEP - 1]
+        return values
+
+
+def consistent_rates(problem, t, Y, Yd_guess):
+    """ẏ consistent with Y at times t: the mass blocks solved for −F(ẏ = guess)."""
+    res, _, _, mass = problem.evaluate(t, Y, Yd_guess, jacobian=True)
+    d = problem.differential
+    out = Yd_guess.copy()
+    sub = mass[:, d][:, :, d]
+    out[:, d] = Yd_guess[:, d] - np.linalg.solve(sub, res[:, d, None])[..., 0]
+    return out
+
+
+class _Rows:
+    """Residuals and Newton blocks of the cells ``rows`` of a batch alone: the same
+    numbers as the whole batch gives for them, from their element instances only."""
+
+    def __init__(self, batch: CellBatch, rows: np.ndarray):
+        self.batch, self.rows, self.G = batch, rows, rows.size
+        self.holds = np.zeros(batch.G, dtype=bool)
+        self.holds[rows] = True
+        self.differential, self.names = batch.differential, batch.names
+        dae, m, k, nb = batch.dae, rows.size, batch.k, batch.nb
+        self.idx, self.boundary_idx = batch.idx[rows], batch._boundary_idx[rows]
+        # local numbering: the cells' unknowns, then their boundary nodes, then a sink
+        local = np.full(batch._n_all, m * (k + nb))
+        local[self.idx] = np.arange(m * k).reshape(m, k)
+        local[self.boundary_idx] = m * k + np.arange(m * nb).reshape(m, nb)
+        self.size = m * (k + nb) + 1
+        # local position of each Newton-block entry (m·k·k: absent from the pattern)
+        where = batch._pos[rows].ravel()
+        remap = np.full(dae.nnz + 1, m * k * k)
+        remap[where] = np.arange(m * k * k)
+        remap[dae.nnz] = m * k * k
+        self.blocks, flow_to, partial_to = [], [], []
+        for block, cells in zip(dae._active, batch._instance_cell):
+            inst = np.flatnonzero(self.holds[cells])
+            if not inst.size:
+                continue
+            family = block.family if inst.size == block.family.n else \
+                type(block.family)([block.family.specs[i] for i in inst], block.family.context)
+            nodes = block.port_node[inst]
+            self.blocks.append((family, nodes))
+            flow_to.append(local[nodes].ravel())
+            ports = nodes.shape[1]
+            pairs = dae._partial_to[block.partials].reshape(-1, ports * ports)[inst]
+            partial_to.append(remap[pairs].ravel())
+        self.flow_to, self.partial_to = np.concatenate(flow_to), np.concatenate(partial_to)
+        pinned = []
+        for family, nodes, cell in batch._pinned:
+            inst = np.flatnonzero(self.holds[cell])
+            if inst.size:
+                sub = family if inst.size == family.n else \
+                    type(family)([family.specs[i] for i in inst], family.context)
+                pinned.append((sub, nodes[inst], np.searchsorted(rows, cell[inst])))
+        self._inputs = _Inputs(pinned, self.boundary_idx if nb else None)
+
+    def evaluate(self, t, Y, Yd, jacobian=False):
+        """As :meth:`CellBatch.evaluate` for the cells ``rows``: t (m,), Y, Yd (m, k)."""
+        batch = self.batch
+        dae = batch.dae
+        m, k, nb = self.rows.size, batch.k, batch.nb
+        p, pdot = self._inputs.fill(batch, self.idx, t, Y, Yd)
+        flows, by_p, by_pdot = [], [], []
+        for family, nodes in self.blocks:
+            if not jacobian:
+                flows.append(family.flows(np.nan, p[nodes], pdot[nodes]).ravel())
+                continue
+            q, dq_dp, dq_dpdot = family.outflows(np.nan, p[nodes], pdot[nodes])
+            flows.append(q.ravel())
+            by_p.append(dq_dp.ravel())
+            by_pdot.append(np.zeros(dq_dp.size) if dq_dpdot is None else dq_dpdot.ravel())
+        total = np.bincount(self.flow_to, weights=np.concatenate(flows), minlength=self.size)
+        res = total[:m * k].reshape(m, k)
+        out = total[m * k:m * (k + nb)].reshape(m, nb)
+        if not jacobian:
+            return res, out
+        return res, out, self._blocks_of(by_p), self._blocks_of(by_pdot)
+
+    def rates(self, t, Y, Yd_guess):
+        return consistent_rates(self, t, Y, Yd_guess)
+
+    def _blocks_of(self, partials):
+        m, k = self.rows.size, self.batch.k
+        return np.bincount(self.partial_to, weights=np.concatenate(partials),
+                           minlength=m * k * k + 1)[:m * k * k].reshape(m, k, k)
 
 
 def _placeholder(name, node, ambient):

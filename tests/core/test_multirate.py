@@ -393,6 +393,52 @@ def test_partition_of_the_scaling_network():
     assert part.largest_cell == 2
 
 
+def test_a_pass_over_some_cells_evaluates_them_as_the_whole_batch_does(monkeypatch):
+    """The evaluator of a subset of cells (CellBatch.rows) gives, for those cells, the
+    residuals, boundary outflows and Newton blocks the whole batch gives, at cell times
+    that differ (each cell's own PULSE phase), with the boundary given by the driver."""
+    from pneunet.engine import cells
+    from pneunet.engine.cells import CellBatch
+    from pneunet.engine.partition import partition
+
+    monkeypatch.setattr(cells, "SUBSET_MIN_CELLS", 1)
+    n = 40
+    circuit = independent_cells(n, 1e-6, "multirate")
+    part = partition(circuit)
+    batch = CellBatch(circuit, [part.cells[i] for i in part.groups[0]])
+    rng = np.random.default_rng(5)
+    t = rng.uniform(0.0, 4.0, n)
+    Y = rng.uniform(100.0, 480.0, (n, batch.k))
+    Yd = rng.normal(0.0, 50.0, (n, batch.k))
+    batch.boundary = lambda times: (470.0 + 5.0 * np.sin(times))[:, None]
+    full = batch.evaluate(t, Y, Yd, jacobian=True)
+    for rows in (np.array([0, 3, 17, 39]), np.arange(5, 25), np.array([11])):
+        got, view = batch.rows(rows)
+        assert np.array_equal(got, rows)
+        part_eval = view.evaluate(t[rows], Y[rows], Yd[rows], jacobian=True)
+        for whole, some in zip(full, part_eval):
+            np.testing.assert_allclose(some, whole[rows], rtol=1e-13, atol=1e-12)
+        res, out = view.evaluate(t[rows], Y[rows], Yd[rows])
+        np.testing.assert_allclose(res, full[0][rows], rtol=1e-13, atol=1e-12)
+        np.testing.assert_allclose(out, full[1][rows], rtol=1e-13, atol=1e-12)
+    assert np.ptp(full[1]) > 0  # the cells really draw different flows from the line
+    # most cells active: the whole batch is as cheap
+    assert batch.rows(np.arange(n - 2)) == (None, None)
+
+
+def test_the_multirate_result_does_not_depend_on_passes_over_active_cells(monkeypatch):
+    """Passes over the active cells alone give the result of passes over all cells."""
+    from pneunet.engine import cells
+
+    monkeypatch.setattr(cells, "SUBSET_MIN_CELLS", 1)
+    sol = independent_cells(30, 1e-6, "multirate").tran(3.0, t_step=0.05)
+    monkeypatch.setattr(cells, "SUBSET_FRACTION", 0.0)
+    whole = independent_cells(30, 1e-6, "multirate").tran(3.0, t_step=0.05)
+    assert sol.stats["steps"] == whole.stats["steps"]
+    for node in ["line"] + [f"act{k}" for k in range(30)]:
+        np.testing.assert_allclose(sol.pressure(node), whole.pressure(node), rtol=1e-7)
+
+
 def test_cells_of_another_structure_form_another_group():
     from pneunet.engine.partition import partition
 
@@ -427,12 +473,12 @@ def test_a_failure_keeps_the_finished_windows(monkeypatch):
 
     real, calls = radau._check_step, {"n": 0}
 
-    def collapse_late(problem, st, active, h):
+    def collapse_late(problem, st, active, h, systems):
         calls["n"] += 1
         if st.t[active].max(initial=0.0) > 2.0 and problem.G > 1:
             raise SolverError("the step of the cell at node act0 collapsed", time=2.0,
                               where="node act0")
-        real(problem, st, active, h)
+        real(problem, st, active, h, systems)
     monkeypatch.setattr(radau, "_check_step", collapse_late)
     with pytest.raises(SolverError) as caught:
         independent_cells(20, 1e-5, "multirate").tran(4.0, t_step=0.01)

@@ -73,6 +73,19 @@ class BatchState:
     def copy(self) -> "BatchState":
         return BatchState(*(getattr(self, f.name).copy() for f in fields(self)))
 
+    def take(self, rows: np.ndarray) -> "BatchState":
+        """The systems ``rows`` alone (copies)."""
+        return BatchState(*(getattr(self, f.name)[:, rows] if f.name == "Z" else
+                            getattr(self, f.name)[rows] for f in fields(self)))
+
+    def put(self, rows: np.ndarray, part: "BatchState") -> None:
+        """Write the systems ``rows`` back from ``part`` (a :meth:`take`)."""
+        for f in fields(self):
+            if f.name == "Z":
+                self.Z[:, rows] = part.Z
+            else:
+                getattr(self, f.name)[rows] = getattr(part, f.name)
+
 
 @dataclass
 class Counters:
@@ -101,14 +114,13 @@ class Corners:
             self.jump[g, :ts.size] = np.isin(ts, js)
         self.next = np.zeros(len(times), dtype=int)
 
-    def upcoming(self, t: np.ndarray) -> np.ndarray:
-        """The next corner (s) after each system's time (inf: none)."""
-        rows = np.arange(len(t))
+    def upcoming(self, t: np.ndarray, rows: np.ndarray) -> np.ndarray:
+        """The next corner (s) after the times ``t`` of the systems ``rows`` (inf: none)."""
         while True:
-            behind = self.times[rows, self.next] <= t * (1 + 1e-13) + 1e-13
+            behind = self.times[rows, self.next[rows]] <= t * (1 + 1e-13) + 1e-13
             if not behind.any():
-                return self.times[rows, self.next]
-            self.next[behind] += 1
+                return self.times[rows, self.next[rows]]
+            self.next[rows[behind]] += 1
 
     def jumps_at(self, rows: np.ndarray, t: np.ndarray) -> np.ndarray:
         """Those of ``rows`` whose next corner is a jump at their time ``t``."""
@@ -138,57 +150,74 @@ def advance(problem, st: BatchState, t_end: float, rtol: float, atol: float,
     """Step every system of ``st`` to ``t_end`` (s), landing on its corners.
 
     ``on_step(rows, before, after)`` is called after each pass with the systems that
-    took a step and their (t, Y, Yd, Q, M) before and after it.
+    took a step and their (t, Y, Yd, Q, M) before and after it.  A problem with a
+    ``rows(active)`` method (:class:`~pneunet.engine.cells.CellBatch`) may give an
+    evaluator of the active systems alone; a pass then works on them only.
     """
     count = count if count is not None else Counters()
-    G, k = st.Y.shape
-    diff = problem.differential
+    everyone = np.arange(st.Y.shape[0])
     tiny = 1e-12 * max(1.0, abs(t_end))
+    subset = getattr(problem, "rows", None)
     while True:
         active = st.t < t_end - tiny
         if not active.any():
             return count
         count.passes += 1
-        target = np.full(G, t_end)
-        if corners is not None:
-            target = np.minimum(target, corners.upcoming(st.t))
-        room = target - st.t
-        h = np.where(room <= st.h, room, np.where(room < 1.5 * st.h, 0.5 * room, st.h))
-        h = np.where(active, h, 1.0)
-        _check_step(problem, st, active, h)
-        weights = 1.0 / (rtol * np.abs(st.Y) + atol)
-        _, _, jac, mass = problem.evaluate(st.t, st.Y, st.Yd, jacobian=True)
-        count.jacobians += 1
-        newton = _newton_matrices(jac, mass, h, active)
-        Z, Yd_stages, Q_stages, ok, iterations = _solve_stages(problem, st, h, newton, weights,
-                                                               active, count)
-        error = _error_estimate(newton[0], mass, st.Yd, Z, h)
-        err = _norm(error, weights, diff)
-        accepted = active & ok & (err <= 1.0)
-        new_h = _next_step(st, h, err, iterations, accepted)
-        new_h = np.where(ok, new_h, 0.5 * h)
-        clipped = h < st.h
-        st.h = np.where(active, np.where(accepted & clipped, np.maximum(st.h, new_h), new_h), st.h)
-        count.rejected += int(np.count_nonzero(active & ~accepted))
-        rows = np.flatnonzero(accepted)
-        if not rows.size:
-            continue
-        count.steps += rows.size
-        st.Z[:, rows], st.h_last[rows], st.fresh[rows] = Z[:, rows], h[rows], False
-        st.err_last[rows] = np.maximum(err[rows], 1e-2)
-        before = (st.t[rows], st.Y[rows], st.Yd[rows], st.Q[rows], st.M[rows])
-        t_new = st.t[rows] + h[rows]
-        st.t[rows] = np.where(np.abs(t_new - target[rows]) <= tiny, target[rows], t_new)
-        st.M[rows] += h[rows][:, None] * (B[0] * Q_stages[0, rows] + B[1] * Q_stages[1, rows]
-                                           + B[2] * Q_stages[2, rows])
-        st.Y[rows] += Z[2, rows]
-        st.Yd[rows], st.Q[rows] = Yd_stages[2, rows], Q_stages[2, rows]
-        if corners is not None:
-            jumped = corners.jumps_at(rows, st.t[rows])
-            if jumped.size:
-                _restart_rates(problem, st, jumped)
-        if on_step is not None:
-            on_step(rows, before, (st.t[rows], st.Y[rows], st.Yd[rows], st.Q[rows], st.M[rows]))
+        rows, view = subset(np.flatnonzero(active)) if subset is not None else (None, None)
+        if rows is None:
+            _pass(problem, st, everyone, active, t_end, tiny, rtol, atol, corners, on_step, count)
+        else:
+            part = st.take(rows)
+            _pass(view, part, rows, active[rows], t_end, tiny, rtol, atol, corners, on_step,
+                  count)
+            st.put(rows, part)
+
+
+def _pass(problem, st, systems, active, t_end, tiny, rtol, atol, corners, on_step, count):
+    """One step attempt of the ``active`` systems of ``st``; ``systems`` are their
+    indices in the whole batch (corners, callbacks and messages use those)."""
+    G = st.Y.shape[0]
+    target = np.full(G, t_end)
+    if corners is not None:
+        target = np.minimum(target, corners.upcoming(st.t, systems))
+    room = target - st.t
+    h = np.where(room <= st.h, room, np.where(room < 1.5 * st.h, 0.5 * room, st.h))
+    h = np.where(active, h, 1.0)
+    _check_step(problem, st, active, h, systems)
+    weights = 1.0 / (rtol * np.abs(st.Y) + atol)
+    _, _, jac, mass = problem.evaluate(st.t, st.Y, st.Yd, jacobian=True)
+    count.jacobians += 1
+    newton = _newton_matrices(jac, mass, h, active)
+    Z, Yd_stages, Q_stages, ok, iterations = _solve_stages(problem, st, h, newton, weights,
+                                                           active, count)
+    error = _error_estimate(newton[0], mass, st.Yd, Z, h)
+    err = _norm(error, weights, problem.differential)
+    accepted = active & ok & (err <= 1.0)
+    new_h = _next_step(st, h, err, iterations, accepted)
+    new_h = np.where(ok, new_h, 0.5 * h)
+    clipped = h < st.h
+    st.h = np.where(active, np.where(accepted & clipped, np.maximum(st.h, new_h), new_h), st.h)
+    count.rejected += int(np.count_nonzero(active & ~accepted))
+    rows = np.flatnonzero(accepted)
+    if not rows.size:
+        return
+    count.steps += rows.size
+    st.Z[:, rows], st.h_last[rows], st.fresh[rows] = Z[:, rows], h[rows], False
+    st.err_last[rows] = np.maximum(err[rows], 1e-2)
+    before = (st.t[rows], st.Y[rows], st.Yd[rows], st.Q[rows], st.M[rows])
+    t_new = st.t[rows] + h[rows]
+    st.t[rows] = np.where(np.abs(t_new - target[rows]) <= tiny, target[rows], t_new)
+    st.M[rows] += h[rows][:, None] * (B[0] * Q_stages[0, rows] + B[1] * Q_stages[1, rows]
+                                       + B[2] * Q_stages[2, rows])
+    st.Y[rows] += Z[2, rows]
+    st.Yd[rows], st.Q[rows] = Yd_stages[2, rows], Q_stages[2, rows]
+    if corners is not None:
+        jumped = corners.jumps_at(systems[rows], st.t[rows])
+        if jumped.size:
+            _restart_rates(problem, st, np.searchsorted(systems, jumped))
+    if on_step is not None:
+        on_step(systems[rows], before, (st.t[rows], st.Y[rows], st.Yd[rows], st.Q[rows],
+                                        st.M[rows]))
 
 
 def _next_step(st, h, err, iterations, accepted):
@@ -204,11 +233,11 @@ def _next_step(st, h, err, iterations, accepted):
     return h / quot
 
 
-def _check_step(problem, st, active, h):
+def _check_step(problem, st, active, h, systems):
     small = active & (h < 1e-13 * np.maximum(1.0, np.abs(st.t)))
     if small.any():
         g = int(np.flatnonzero(small)[0])
-        node = problem.names[g][0]
+        node = problem.names[systems[g]][0]
         raise SolverError(f"the step of the cell at node {node} collapsed at t = {st.t[g]:.6g} s",
                           time=float(st.t[g]), where=f"node {node}",
                           hint=".options method=single (one step for the whole circuit)")
@@ -265,10 +294,11 @@ def _solve_stages(problem, st, h, inverse, weights, active, count):
     previous = None
     residual = np.empty((3, G, k))
     outflow = np.empty((3,) + st.Q.shape)
+    stage_times = [st.t + c * h for c in C]
     for _ in range(NEWTON_ITERATIONS):
         rates = _mix(A_INV, Z) / h[None, :, None]
         for i in range(3):
-            residual[i], outflow[i] = problem.evaluate(st.t + C[i] * h, st.Y + Z[i], rates[i])
+            residual[i], outflow[i] = problem.evaluate(stage_times[i], st.Y + Z[i], rates[i])
         count.residuals += 3
         delta = _newton_update(inverse, residual)
         size = np.sqrt(np.mean((delta * weights[None]) ** 2, axis=(0, 2)))
