@@ -264,7 +264,6 @@ class _Rows:
     def evaluate(self, t, Y, Yd, jacobian=False):
         """As :meth:`CellBatch.evaluate` for the cells ``rows``: t (m,), Y, Yd (m, k)."""
         batch = self.batch
-        dae = batch.dae
         m, k, nb = self.rows.size, batch.k, batch.nb
         p, pdot = self._inputs.fill(batch, self.idx, t, Y, Yd)
         flows, by_p, by_pdot = [], [], []
