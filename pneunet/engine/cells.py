@@ -30,8 +30,10 @@ SUBSET_MIN_CELLS = 200  # batches from which that pays (smaller ones: the fixed 
 class CellBatch:
     """Residuals and Newton blocks of G cells with k unknowns each (kPa, mg/s).
 
-    ``boundary(t) -> (G, nb)`` gives the pressures of each cell's boundary nodes at
-    the cells' times t (G,); ``injection(t, Y) -> (flows, slopes)`` adds flows (G, k)
+    ``boundary(t) -> (G, c)`` gives hub pressures at the cells' times t (G,), of which
+    cell g's boundary node j reads column ``boundary_cols[g, j]`` (default j: the
+    boundary nodes in order; cells of one structure may sit on different hub nodes);
+    ``injection(t, Y) -> (flows, slopes)`` adds flows (G, k)
     (mg/s) leaving each unknown node (the hub's cells) and their derivatives by the
     node's own pressure (G, k), mg/(s·kPa).  Either may be None.
     """
@@ -73,6 +75,7 @@ class CellBatch:
                                        for names in self._boundary_names], dtype=int).reshape(
                                            self.G, self.nb)
         self.boundary = None
+        self.boundary_cols = np.broadcast_to(np.arange(self.nb), (self.G, self.nb))
         self.injection = None
         self._build_maps(cells)
         self._view = None  # the last subset evaluator (see rows)
@@ -107,7 +110,8 @@ class CellBatch:
         self.differential = dae.differential[self.idx[0]]
         # the cell of each instance of each family with a port at an unknown node
         self._instance_cell = [cell_of[b.port_node].max(axis=1) for b in dae._active]
-        self._inputs = _Inputs(self._pinned, self._boundary_idx if self.nb else None)
+        self._inputs = _Inputs(self._pinned, self._boundary_idx if self.nb else None,
+                               lambda: self.boundary_cols)
 
     def _pressures(self, t, Y, Yd):
         return self._inputs.fill(self, self.idx, t, Y, Yd)
@@ -175,8 +179,8 @@ class _Inputs:
 
     KEEP = 4
 
-    def __init__(self, pinned, boundary_idx):
-        self.pinned, self.boundary_idx = pinned, boundary_idx
+    def __init__(self, pinned, boundary_idx, boundary_cols):
+        self.pinned, self.boundary_idx, self._cols = pinned, boundary_idx, boundary_cols
         self._kept = []  # (times, boundary function, values), newest first
 
     def fill(self, batch, idx, t, Y, Yd):
@@ -202,7 +206,8 @@ class _Inputs:
                 return values
         values = [family.pinned_pressure_each(t[cell]) for family, _, cell in self.pinned]
         if self.boundary_idx is not None:
-            values.append(boundary(t))
+            cols = self._cols()
+            values.append(boundary(t)[np.arange(cols.shape[0])[:, None], cols])
         self._kept = [(t.copy(), boundary, values)] + self._kept[:self.KEEP - 1]
         return values
 
@@ -259,7 +264,8 @@ class _Rows:
                 sub = family if inst.size == family.n else \
                     type(family)([family.specs[i] for i in inst], family.context)
                 pinned.append((sub, nodes[inst], np.searchsorted(rows, cell[inst])))
-        self._inputs = _Inputs(pinned, self.boundary_idx if nb else None)
+        self._inputs = _Inputs(pinned, self.boundary_idx if nb else None,
+                               lambda: batch.boundary_cols[rows])
 
     def evaluate(self, t, Y, Yd, jacobian=False):
         """As :meth:`CellBatch.evaluate` for the cells ``rows``: t (m,), Y, Yd (m, k)."""

@@ -113,7 +113,11 @@ class _Group:
         self.cells = cells
         self.batch = CellBatch(circuit, cells)
         self.cols = np.array([[dae.node_index(n) for n in c.nodes] for c in cells], dtype=int)
-        self.hub_cols = [part.hub_nodes.index(h) for h in cells[0].hub_nodes]
+        # (G, nb): the hub node (its index in part.hub_nodes) of each cell's boundary nodes
+        self.hub_cols = np.array([[part.hub_nodes.index(h) for h in c.hub_nodes]
+                                  for c in cells], dtype=int).reshape(len(cells), -1)
+        self.batch.boundary_cols = self.hub_cols
+        self.n_hub = len(part.hub_nodes)
         self.corners = radau.Corners(*_cell_corners(corners, cells))
         self.times, self.out = times, out
         self.next_out = np.ones(len(cells), dtype=int)
@@ -129,22 +133,31 @@ class _Group:
 
     def advance(self, t_end, S, opts, count):
         """Integrate to ``t_end``; with sample times ``S``, record in self.drawn the
-        mass (mg) the cells have drawn from each hub node and its rate (mg/s) there."""
+        mass (mg) the cells have drawn from each hub node and its rate (mg/s) there,
+        (S.size, n_hub) each."""
         self.begin(opts)
+        cols = self.hub_cols
         if S is not None:
-            mass, rate = np.zeros((S.size, self.batch.nb)), np.zeros((S.size, self.batch.nb))
-            mass[0], rate[0] = self.state.M.sum(axis=0), self.state.Q.sum(axis=0)
+            mass, rate = np.zeros((S.size, self.n_hub)), np.zeros((S.size, self.n_hub))
+            mass[0], rate[0] = self.drawn_now(self.state.M), self.drawn_now(self.state.Q)
             next_sample = np.ones(self.batch.G, dtype=int)
 
         def on_step(rows, before, after):
             _record(self.times, self.next_out, rows, before, after, self._write)
             if S is not None:
                 _record(S, next_sample, rows, before, after, lambda r, k, m, q: (
-                    np.add.at(mass, k, m), np.add.at(rate, k, q)), mass=True)
+                    np.add.at(mass, (k[:, None], cols[r]), m),
+                    np.add.at(rate, (k[:, None], cols[r]), q)), mass=True)
         radau.advance(self.batch, self.state, t_end, opts.rtol, opts.atol, self.corners,
                       on_step, count)
         self.drawn = (mass, rate) if S is not None else None
         return count
+
+    def drawn_now(self, per_cell):
+        """Per hub node (n_hub,): the sum of the cells' ``per_cell`` (G, nb) drawn from it."""
+        total = np.zeros(self.n_hub)
+        np.add.at(total, self.hub_cols, per_cell)
+        return total
 
     def _write(self, rows, k, y, _):
         self.out[k[:, None], self.cols[rows]] = y
@@ -245,11 +258,10 @@ def _relax(groups, hub, t_start, t_stop, opts, count, pool, done) -> dict:
     draw = np.zeros(len(hub.cols))
     flat = np.repeat(hub.y0, 2, axis=0)
     for group in groups:
-        group.batch.boundary = _values(_cubic(np.array([t_start, t_stop]),
-                                              flat[:, group.hub_cols],
-                                              np.zeros_like(flat[:, group.hub_cols])))
+        group.batch.boundary = _values(_cubic(np.array([t_start, t_stop]), flat,
+                                              np.zeros_like(flat)))
         group.begin(opts)
-        np.add.at(draw, group.hub_cols, group.state.Q.sum(axis=0))
+        draw += group.drawn_now(group.state.Q)
     hub.begin(draw, opts)
     T, H = t_start, (t_stop - t_start) / 50
     windows = sweeps = halvings = 0
@@ -277,12 +289,11 @@ def _relax(groups, hub, t_start, t_stop, opts, count, pool, done) -> dict:
             mass, rate = np.zeros_like(p[0]), np.zeros_like(p[0])
             for group, snap in zip(groups, saved):
                 group.restore(snap)
-                group.batch.boundary = _values(_cubic(S, p[0][:, group.hub_cols],
-                                                      p[1][:, group.hub_cols]))
+                group.batch.boundary = _values(_cubic(S, p[0], p[1]))
             _advance_all(groups, T + H, S, opts, count, pool)
             for group in groups:
-                mass[:, group.hub_cols] += group.drawn[0]
-                rate[:, group.hub_cols] += group.drawn[1]
+                mass += group.drawn[0]
+                rate += group.drawn[1]
             hub.restore(saved_hub)
             new = hub.advance(S, land, (mass, rate), p, slope, opts, count)
             change = _change(new, p, opts)
@@ -324,12 +335,13 @@ def _draw_slope(groups, n_hub, dp=1e-3):
         seen = restore(st.t)
         batch.boundary = lambda t: seen
         _, base = batch.evaluate(st.t, st.Y, st.Yd)
-        for j, col in enumerate(group.hub_cols):
+        cells = np.arange(batch.G)
+        for j, col in enumerate(group.hub_cols.T):  # each cell's j-th boundary node
             shifted = seen.copy()
-            shifted[:, j] += dp
+            shifted[cells, col] += dp
             batch.boundary = lambda t, b=shifted: b
             _, q = batch.evaluate(st.t, st.Y, st.Yd)
-            slope[col] += float(np.sum(q[:, j] - base[:, j])) / dp
+            np.add.at(slope, col, (q[:, j] - base[:, j]) / dp)
         batch.boundary = restore
     return slope
 

@@ -9,7 +9,7 @@ the hub) use is copied into each of them: a pinned pressure is a boundary, so th
 copy is exact.
 
 Cells with the same structure (the same element kinds joined the same way; their
-parameters may differ) form a *group*, integrated together as arrays by
+parameters and the hub nodes they sit on may differ) form a *group*, integrated together as arrays by
 :mod:`pneunet.engine.multirate`.
 """
 from __future__ import annotations
@@ -116,15 +116,17 @@ def partition(circuit, hub_degree: int = HUB_DEGREE) -> Partition:
 
 def _signature(circuit, cell: Cell) -> tuple:
     """The cell's structure: element kinds with their nodes numbered by first use
-    (hub nodes by name, references as 'ref', pinned nodes by first use too)."""
+    (hub nodes apart: cells of one structure on different hub nodes are one group;
+    references as 'ref', pinned nodes by first use too)."""
     local: dict[str, str] = {}
+    hubs: dict[str, str] = {}
     parts = []
     for name in cell.elements:
         spec = circuit.elements[name]
         nodes = []
         for n in spec.nodes:
             if n in cell.hub_nodes:
-                nodes.append("hub:" + n)
+                nodes.append(hubs.setdefault(n, f"hub{len(hubs)}"))
             elif circuit.is_reference(n):
                 nodes.append("ref")
             else:

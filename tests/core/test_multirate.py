@@ -439,6 +439,53 @@ def test_the_multirate_result_does_not_depend_on_passes_over_active_cells(monkey
         np.testing.assert_allclose(sol.pressure(node), whole.pressure(node), rtol=1e-7)
 
 
+def two_by_two_manifolds(method, rtol, n=40):
+    """bench_scaling's cells on two supply lines and two exhaust lines of different
+    resistances: cell k draws from supply k % 2 and vents into exhaust (k // 2) % 2
+    (each exhaust vents to atm)."""
+    from bench_scaling import AMBIENT, P_CTRL_HIGH, P_SUPPLY
+
+    c = Circuit("manifolds", rtol=rtol, atol=rtol, ambient=AMBIENT, method=method)
+    c.pressure_source("PS", "sup", P_SUPPLY)
+    for m in range(2):
+        c.resistor(f"RS{m}", "sup", f"line{m}", R=(0.6, 3.0)[m] / n)
+        c.volume(f"VL{m}", f"line{m}", V=f"{10 * n}mL", p0=P_SUPPLY)
+        c.resistor(f"RE{m}", f"exh{m}", "atm", R=(0.2, 2.0)[m] / n)
+        c.volume(f"VE{m}", f"exh{m}", V=f"{5 * n}mL")
+    delays = 0.2 + np.random.default_rng(7).uniform(0.0, 2.5, n)
+    for k in range(n):
+        c.pressure_source(f"PC{k}", f"c{k}", Pulse(AMBIENT, P_CTRL_HIGH, delay=delays[k],
+                                                 rise=0.05, fall=0.05, width=1.0, period=2.0))
+        c.resistor(f"RC{k}", f"c{k}", f"ctl{k}", R=5.0)
+        c.volume(f"VC{k}", f"ctl{k}", V="10mL")
+        c.valve(f"X{k}", f"line{k % 2}", f"act{k}", f"ctl{k}", model="axi")
+        c.volume(f"VA{k}", f"act{k}", V="50mL")
+        c.resistor(f"RV{k}", f"act{k}", f"exh{(k // 2) % 2}", R=3.0)
+    return c
+
+
+def test_cells_on_different_hub_nodes_are_one_group_and_match_single_rate():
+    """Cells of one structure on different supply and exhaust lines are integrated as
+    one batch (each cell reading its own lines), and agree with single-rate IDA."""
+    from pneunet.engine.partition import partition
+
+    n = 40
+    part = partition(two_by_two_manifolds("multirate", 1e-6, n))
+    assert sorted(part.hub_nodes) == ["exh0", "exh1", "line0", "line1"]
+    assert part.groups == [list(range(n))]
+    assert {tuple(c.hub_nodes) for c in part.cells} == {
+        ("line0", "exh0"), ("line1", "exh0"), ("line0", "exh1"), ("line1", "exh1")}
+    ref = two_by_two_manifolds("single", 1e-8, n).tran(3.0, t_step=0.01)
+    sol = two_by_two_manifolds("multirate", 1e-6, n).tran(3.0, t_step=0.01)
+    assert sol.stats["method"] == "multirate" and sol.stats["groups"] == 1
+    nodes = ["line0", "line1", "exh0", "exh1"] + [f"act{k}" for k in range(n)]
+    worst = max(np.abs(sol.pressure(x) - at(sol, ref, x)).max() for x in nodes)
+    assert worst <= 0.1
+    # the lines really differ: each cell must read its own
+    assert np.abs(ref.pressure("exh0") - ref.pressure("exh1")).max() > 1.0
+    assert np.abs(ref.pressure("line0") - ref.pressure("line1")).max() > 1.0
+
+
 def test_cells_of_another_structure_form_another_group():
     from pneunet.engine.partition import partition
 
