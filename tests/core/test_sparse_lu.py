@@ -72,7 +72,8 @@ def test_a_singular_band_falls_back_to_superlu():
 
 
 def test_sparse_path_of_a_transient_matches_the_dense_one(monkeypatch):
-    """demux3 (27 unknowns) through the sparse path (bordered band, then SuperLU)
+    """demux3 (27 unknowns) through the sparse path (bordered band, then SuperLU, then
+    with the LU refreshed at every step's Newton iteration instead of when IDA asks)
     gives the dense path's pressures up to the integration tolerance."""
     from pathlib import Path
 
@@ -84,8 +85,10 @@ def test_sparse_path_of_a_transient_matches_the_dense_one(monkeypatch):
     dense = transient(circuit, 8.0, t_step=0.01)
     assert dense.stats["linear_solver"] == "dense"
     monkeypatch.setattr(sundae, "DENSE_LIMIT", 10)
-    for name, limit in (("bordered band", module.BAND_WORK_LIMIT), ("SuperLU", 0)):
+    for name, limit, refresh in (("bordered band", module.BAND_WORK_LIMIT, 10),
+                                 ("SuperLU", 0, 10), ("bordered band", module.BAND_WORK_LIMIT, 1)):
         monkeypatch.setattr(module, "BAND_WORK_LIMIT", limit)
+        monkeypatch.setattr(sundae, "REFRESH_STEPS", refresh)
         sparse = transient(circuit, 8.0, t_step=0.01)
         assert name in sparse.stats["linear_solver"]
         for node in ("act[0]", "act[5]", "act[7]"):
