@@ -7,7 +7,9 @@ Run through ``python benchmarks/bench_scaling.py --schedule independent`` (or
 * ``independent``: delays uniform in 0.2–4.2 s, one per cell (seeded), so a solver
   with one global step must resolve every cell's edges.
 
-Each run is a fresh process (peak memory = its maximum resident set), timed from
+Each run is a fresh process (peak memory = its maximum resident set, plus that of the
+largest worker process times the number of workers when the cells are split over
+processes: an upper bound), timed from
 the circuit's assembly to the solution (netlist-free: ``Circuit`` calls).  The error
 is the largest actuator or line pressure difference (kPa) on the 50 ms output grid
 against single-rate IDA at rtol = atol = 1e-8, for N ≤ ``--reference-max``.
@@ -48,7 +50,9 @@ def one(n, schedule, method, rtol, atol, save):
     wall = time.perf_counter() - t0
     names = [f"act{k}" for k in range(n)] + ["line"]
     np.save(save, np.column_stack([sol.t] + [sol.pressure(x) for x in names]))
-    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    workers = int(sol.stats.get("processes", 1))
+    peak = (resource.getrusage(resource.RUSAGE_SELF).ru_maxrss + (workers if workers > 1 else 0)
+            * resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss) / 1024
     print(json.dumps(dict(wall=wall, steps=int(sol.stats.get("steps", 0)), peak_mb=peak,
                           method=sol.stats.get("method", "single"),
                           sweeps=sol.stats.get("sweeps"), windows=sol.stats.get("windows"))))

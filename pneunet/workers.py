@@ -1,6 +1,7 @@
-"""Local process pools whose workers never outlive their parent.
+"""Local worker processes that never outlive their parent.
 
-A worker of :func:`process_pool` dies with the process that made the pool, however
+:func:`process_pool` makes a pool of them; a :class:`Servant` is one object moved into a
+worker of its own whose methods the parent calls.  A worker dies with the process that made the pool, however
 that process ends (SIGKILL included): on Linux the kernel kills it
 (``prctl(PR_SET_PDEATHSIG, SIGKILL)``), and everywhere a watchdog thread ends it within
 :data:`WATCH_S` seconds of its parent's death.  Workers ignore SIGINT: on Ctrl-C the
@@ -29,6 +30,86 @@ def process_pool(workers: int):
         return None
     return ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("fork"),
                                initializer=_guard, initargs=(os.getpid(),))
+
+
+class Servant:
+    """An object built by ``make(*args)`` in a forked worker process of its own (the
+    parent never holds it), its methods called over a pipe.
+
+    ``call(name, *args)`` runs ``obj.name(*args)`` there and returns the result;
+    ``send`` and ``receive`` split that, so that several servants work at once.  What
+    ``make`` or the method raises is raised in the parent.  Memory the parent shares with
+    the fork (an anonymous shared ``mmap``) is the way to return bulk results.
+    """
+
+    def __init__(self, make, *args):
+        import multiprocessing
+
+        context = multiprocessing.get_context("fork")
+        self._conn, theirs = context.Pipe()
+        self._process = context.Process(target=_serve, args=(make, args, theirs, os.getpid()),
+                                        daemon=True)
+        self._process.start()
+        theirs.close()
+        self._built = False
+
+    def send(self, name: str, *args) -> None:
+        if not self._built:  # the worker first says whether make() worked
+            self._built = True
+            self.receive()
+        self._conn.send((name, args))
+
+    def receive(self):
+        status, value = self._conn.recv()
+        if status == "error":
+            raise value
+        return value
+
+    def call(self, name: str, *args):
+        self.send(name, *args)
+        return self.receive()
+
+    def close(self) -> None:
+        """End the worker (at once if it is busy)."""
+        try:
+            self._conn.send(None)
+        except OSError:
+            pass
+        self._process.join(timeout=1)
+        if self._process.is_alive():
+            self._process.kill()
+            self._process.join()
+        self._conn.close()
+
+
+def servants_available() -> bool:
+    """Whether :class:`Servant` can fork here."""
+    import multiprocessing
+
+    return "fork" in multiprocessing.get_all_start_methods()
+
+
+def _serve(make, args, conn, parent: int) -> None:
+    _guard(parent)
+    try:
+        obj = make(*args)
+    except Exception as exc:
+        conn.send(("error", exc))
+        return
+    conn.send(("ok", None))
+    while True:
+        try:
+            request = conn.recv()
+        except EOFError:
+            return
+        if request is None:
+            return
+        name, args = request
+        try:
+            reply = ("ok", getattr(obj, name)(*args))
+        except Exception as exc:  # raised again in the parent
+            reply = ("error", exc)
+        conn.send(reply)
 
 
 def stop(pool) -> None:

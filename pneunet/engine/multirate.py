@@ -25,6 +25,10 @@ Every cell meets IDA's local error test in IDA's norm; the coupling error is
 bounded by the same tolerance at every sample.  Cells with algebraic nodes and no
 hub (cells driven by ideal sources only) are independent circuits: each runs
 through the single-rate integrator of its own, with fold jumps.
+
+From :data:`PARALLEL_MIN_BATCHED` batched cells on, the cells are split in two, each
+half built and integrated in a worker process of its own (:class:`~pneunet.workers.Servant`)
+with the outputs in shared memory; the hub stays in the calling process.
 """
 from __future__ import annotations
 
@@ -39,7 +43,7 @@ from .solution import Solution, build_solution
 from .solvers import radau
 from .solvers.interpolate import hermite_step
 from ..errors import SolverError
-from ..workers import process_pool
+from ..workers import Servant, process_pool, servants_available
 
 SAMPLES = 8                # hub sample intervals per window: at least,
 MAX_SAMPLES = 64           # at most; else one per step of the hub (once it has taken one)
@@ -48,7 +52,7 @@ COUPLING_TOL = 30          # accepted hub-sample change between sweeps, in local
 DEFAULT_OUTPUTS = 1000     # output points when the .tran gives no step
 PARALLEL_WORKERS = 2
 PARALLEL_MIN_CELLS = 8     # independent cells from which they run in worker processes
-PARALLEL_MIN_BATCH = 5000  # cells of one structure from which two threads share them
+PARALLEL_MIN_BATCHED = 1000  # batched cells from which they are split over worker processes
 
 
 def transient(circuit, part: Partition, t_stop: float, t_step: float | None, t_start: float,
@@ -62,16 +66,22 @@ def transient(circuit, part: Partition, t_stop: float, t_step: float | None, t_s
     times = (np.append(np.arange(t_start, t_stop, t_step)[1:], t_stop) if t_step else
              np.linspace(t_start, t_stop, DEFAULT_OUTPUTS + 1)[1:])
     times = np.concatenate([[t_start], times])
-    out = np.empty((times.size, dae.n))
-    out[0] = y0
     alone = [c for c in part.cells if any(n in algebraic for n in c.nodes)]
     batched = [ids for ids in part.groups
                if not any(n in algebraic for n in part.cells[ids[0]].nodes)]
+    split = servants_available() and sum(map(len, batched)) >= PARALLEL_MIN_BATCHED
+    out = _shared((times.size, dae.n)) if split else np.empty((times.size, dae.n))
+    out[0] = y0
     corners = dae.instance_corners(t_start, t_stop)
-    groups = [_Group(circuit, part, chunk, dae, corners, y0, times, out, t_start, t_stop)
-              for ids in batched for chunk in np.array_split(
-                  ids, PARALLEL_WORKERS if len(ids) >= PARALLEL_MIN_BATCH else 1)]
-    stats = dict(method="multirate", cells=len(part.cells), groups=len(groups),
+    chunks = [chunk for ids in batched for chunk in
+              np.array_split(ids, PARALLEL_WORKERS if split else 1)]
+    # with split: each part of the cells built and integrated in a worker process of its
+    # own, the outputs in shared memory
+    groups = [(_GroupProcess if split else _Group)(circuit, part, chunk, dae, corners, y0,
+                                                   times, out, t_start, t_stop)
+              for chunk in chunks]
+    stats = dict(method="multirate", cells=len(part.cells), groups=len(batched),
+                 processes=len(groups) if split else 1,
                  hub_nodes=len(part.hub_nodes), cells_alone=len(alone))
     count = radau.Counters()
     if alone:
@@ -79,30 +89,30 @@ def transient(circuit, part: Partition, t_stop: float, t_step: float | None, t_s
                                                 times, out, dae)
         count.steps += alone_steps
         stats["branch_jumps"] = jumps
-    pool = _threads(groups)
     done = [t_start]  # the time up to which every output row is final
     try:
         if part.hub_nodes:
             hub = _Hub(circuit, part, dae, corners, y0, times, out, t_start)
-            stats.update(_relax(groups, hub, t_start, t_stop, opts, count, pool, done))
+            stats.update(_relax(groups, hub, t_start, t_stop, opts, count, done))
         elif groups:
-            _advance_all(groups, t_stop, None, opts, count, pool)
+            _advance_all(groups, t_stop, None, opts, count)
     except SolverError as err:
         if not part.hub_nodes:  # each cell recorded its outputs up to where it got
-            done[0] = min([t_start] + [float(g.state.t.min()) for g in groups if g.state])
+            done[0] = min([t_start] + [g.earliest() for g in groups])
         rows = int(np.searchsorted(times, done[0], side="right"))
-        partial = build_solution(dae, times[:rows], out[:rows].copy(), dict(stats, failed=True), ())
+        partial = build_solution(dae, times[:rows], np.array(out[:rows]),
+                                 dict(stats, failed=True), ())
         raise SolverError(err.message, time=err.time, where=err.where, hint=err.hint,
                           partial=partial) from None
     finally:
-        if pool is not None:
-            pool.shutdown()
+        for group in groups:
+            group.close()
     stats.update(steps=count.steps, rejected=count.rejected, passes=count.passes,
                  residual_calls=count.residuals, jacobian_calls=count.jacobians,
                  output_points=int(times.size), unknowns=dae.n,
                  algebraic=len(algebraic), backend="radau5 (multirate)",
                  wall_time_s=_time.perf_counter() - wall)
-    return build_solution(dae, times, out, stats, ())
+    return build_solution(dae, times, np.array(out), stats, ())
 
 
 class _Group:
@@ -124,17 +134,39 @@ class _Group:
         self.t_start, self.span = t_start, t_stop - t_start
         self.y0 = y0[self.cols]
         self.state = None
-        self.drawn = None
+        self._saved = None
 
     def begin(self, opts):
         if self.state is None:
             self.state = radau.start(self.batch, self.t_start, self.y0, self.span,
                                      opts.rtol, opts.atol)
 
-    def advance(self, t_end, S, opts, count):
-        """Integrate to ``t_end``; with sample times ``S``, record in self.drawn the
-        mass (mg) the cells have drawn from each hub node and its rate (mg/s) there,
+    def set_hub(self, S, value, slope):
+        """The hub pressures the cells see: the cubic Hermite through ``value`` and
+        ``slope`` (S.size, n_hub) at the times S."""
+        self.batch.boundary = _values(_cubic(S, value, slope))
+
+    def draw_now(self):
+        """The cells' draw from each hub node now (n_hub,), mg/s."""
+        return self.drawn_now(self.state.Q)
+
+    def earliest(self) -> float:
+        """The time (s) every cell has reached."""
+        return float(self.state.t.min()) if self.state is not None else self.t_start
+
+    def advance_later(self, t_end, S, opts):
+        """:meth:`advance`, its result given by the returned function."""
+        result = self.advance(t_end, S, opts)
+        return lambda: result
+
+    def close(self):
+        pass
+
+    def advance(self, t_end, S, opts):
+        """Integrate to ``t_end``; return the counters and, with sample times ``S``,
+        the mass (mg) the cells have drawn from each hub node and its rate (mg/s) there,
         (S.size, n_hub) each."""
+        count = radau.Counters()
         self.begin(opts)
         cols = self.hub_cols
         if S is not None:
@@ -150,8 +182,7 @@ class _Group:
                     np.add.at(rate, (k[:, None], cols[r]), q)), mass=True)
         radau.advance(self.batch, self.state, t_end, opts.rtol, opts.atol, self.corners,
                       on_step, count)
-        self.drawn = (mass, rate) if S is not None else None
-        return count
+        return count, ((mass, rate) if S is not None else None)
 
     def drawn_now(self, per_cell):
         """Per hub node (n_hub,): the sum of the cells' ``per_cell`` (G, nb) drawn from it."""
@@ -159,17 +190,59 @@ class _Group:
         np.add.at(total, self.hub_cols, per_cell)
         return total
 
+    def draw_slope(self, dp=1e-3):
+        """How much more the cells draw from each hub node per kPa of its pressure, now
+        (a difference quotient of every cell's boundary outflow), (n_hub,) mg/(s·kPa)."""
+        st, batch = self.state, self.batch
+        slope = np.zeros(self.n_hub)
+        restore = batch.boundary
+        seen = restore(st.t)
+        batch.boundary = lambda t: seen
+        _, base = batch.evaluate(st.t, st.Y, st.Yd)
+        cells = np.arange(batch.G)
+        for j, col in enumerate(self.hub_cols.T):  # each cell's j-th boundary node
+            shifted = seen.copy()
+            shifted[cells, col] += dp
+            batch.boundary = lambda t, b=shifted: b
+            _, q = batch.evaluate(st.t, st.Y, st.Yd)
+            np.add.at(slope, col, (q[:, j] - base[:, j]) / dp)
+        batch.boundary = restore
+        return slope
+
     def _write(self, rows, k, y, _):
         self.out[k[:, None], self.cols[rows]] = y
 
-    def snapshot(self):
-        return self.state.copy(), self.corners.next.copy(), self.next_out.copy()
+    def save(self):
+        """Keep the state, to :meth:`restore` it (the start of a window)."""
+        self._saved = self.state.copy(), self.corners.next.copy(), self.next_out.copy()
 
-    def restore(self, saved):
-        state, corners, next_out = saved
+    def restore(self):
+        state, corners, next_out = self._saved
         self.state = state.copy()
         self.corners.next[:] = corners
         self.next_out[:] = next_out
+
+
+class _GroupProcess:
+    """A :class:`_Group` built and kept in a worker process of its own (its outputs in
+    shared memory): the same methods, and :meth:`advance_later` runs while the caller
+    goes on."""
+
+    def __init__(self, *args):
+        self._servant = Servant(_Group, *args)
+
+    def __getattr__(self, name):
+        if name in ("begin", "set_hub", "draw_now", "earliest", "draw_slope", "save",
+                    "restore"):
+            return lambda *args: self._servant.call(name, *args)
+        raise AttributeError(name)
+
+    def advance_later(self, t_end, S, opts):
+        self._servant.send("advance", t_end, S, opts)
+        return self._servant.receive
+
+    def close(self):
+        self._servant.close()
 
 
 class _Hub:
@@ -235,33 +308,33 @@ class _Hub:
         self.state, self.next_out = saved[0].copy(), saved[1].copy()
 
 
-def _advance_all(groups, t_end, S, opts, count, pool):
-    """Advance every group to ``t_end`` (on ``pool``'s threads when there is one)."""
-    run = pool.map if pool is not None else map
-    for counted in run(lambda g: g.advance(t_end, S, opts, radau.Counters()), groups):
+def _advance_all(groups, t_end, S, opts, count):
+    """Advance every group to ``t_end`` (those in worker processes at the same time);
+    return what each drew (see :meth:`_Group.advance`)."""
+    waiting = [g.advance_later(t_end, S, opts) for g in groups]
+    drawn, failure = [], None
+    for wait in waiting:  # every reply is collected, so the workers are idle after
+        try:
+            counted, group_drawn = wait()
+        except SolverError as err:
+            failure = failure or err
+            continue
         count.add(counted)
+        drawn.append(group_drawn)
+    if failure is not None:
+        raise failure
+    return drawn
 
 
-def _threads(groups):
-    """A pool of threads for the groups, or None for one group: numpy's array work
-    runs outside the GIL, so two halves of a large group share both cores."""
-    if len(groups) < 2:
-        return None
-    from concurrent.futures import ThreadPoolExecutor
-
-    return ThreadPoolExecutor(min(len(groups), PARALLEL_WORKERS))
-
-
-def _relax(groups, hub, t_start, t_stop, opts, count, pool, done) -> dict:
+def _relax(groups, hub, t_start, t_stop, opts, count, done) -> dict:
     """Windowed waveform relaxation of ``groups`` and ``hub`` to ``t_stop``; ``done[0]``
     follows the end of the last accepted window (s)."""
     draw = np.zeros(len(hub.cols))
     flat = np.repeat(hub.y0, 2, axis=0)
     for group in groups:
-        group.batch.boundary = _values(_cubic(np.array([t_start, t_stop]), flat,
-                                              np.zeros_like(flat)))
+        group.set_hub(np.array([t_start, t_stop]), flat, np.zeros_like(flat))
         group.begin(opts)
-        draw += group.drawn_now(group.state.Q)
+        draw += group.draw_now()
     hub.begin(draw, opts)
     T, H = t_start, (t_stop - t_start) / 50
     windows = sweeps = halvings = 0
@@ -281,19 +354,19 @@ def _relax(groups, hub, t_start, t_stop, opts, count, pool, done) -> dict:
                                   > 1e-9 * H]) if outputs.size else S
         p = (hub.state.Y[0] + (S - T)[:, None] * hub.state.Yd[0],
              np.repeat(hub.state.Yd, S.size, axis=0))
-        saved = [g.snapshot() for g in groups]
+        for group in groups:
+            group.save()
         saved_hub = hub.snapshot()
-        slope = _draw_slope(groups, len(hub.cols))
+        slope = sum(group.draw_slope() for group in groups)
         for sweep in range(1, MAX_SWEEPS + 1):
             sweeps += 1
             mass, rate = np.zeros_like(p[0]), np.zeros_like(p[0])
-            for group, snap in zip(groups, saved):
-                group.restore(snap)
-                group.batch.boundary = _values(_cubic(S, p[0], p[1]))
-            _advance_all(groups, T + H, S, opts, count, pool)
             for group in groups:
-                mass += group.drawn[0]
-                rate += group.drawn[1]
+                group.restore()
+                group.set_hub(S, p[0], p[1])
+            for group_mass, group_rate in _advance_all(groups, T + H, S, opts, count):
+                mass += group_mass
+                rate += group_rate
             hub.restore(saved_hub)
             new = hub.advance(S, land, (mass, rate), p, slope, opts, count)
             change = _change(new, p, opts)
@@ -306,8 +379,8 @@ def _relax(groups, hub, t_start, t_stop, opts, count, pool, done) -> dict:
                     break
             p = new
         else:
-            for group, snap in zip(groups, saved):
-                group.restore(snap)
+            for group in groups:
+                group.restore()
             hub.restore(saved_hub)
             H *= 0.5
             halvings += 1
@@ -323,27 +396,6 @@ def _relax(groups, hub, t_start, t_stop, opts, count, pool, done) -> dict:
 def _change(new, seen, opts) -> float:
     """Largest change of the hub samples, in local tolerances (IDA's weights)."""
     return float(np.max(np.abs(new[0] - seen[0]) / (opts.rtol * np.abs(new[0]) + opts.atol)))
-
-
-def _draw_slope(groups, n_hub, dp=1e-3):
-    """How much more the cells draw from each hub node per kPa of its pressure, now
-    (a difference quotient of every cell's boundary outflow), mg/(s·kPa)."""
-    slope = np.zeros(n_hub)
-    for group in groups:
-        st, batch = group.state, group.batch
-        restore = batch.boundary
-        seen = restore(st.t)
-        batch.boundary = lambda t: seen
-        _, base = batch.evaluate(st.t, st.Y, st.Yd)
-        cells = np.arange(batch.G)
-        for j, col in enumerate(group.hub_cols.T):  # each cell's j-th boundary node
-            shifted = seen.copy()
-            shifted[cells, col] += dp
-            batch.boundary = lambda t, b=shifted: b
-            _, q = batch.evaluate(st.t, st.Y, st.Yd)
-            np.add.at(slope, col, (q[:, j] - base[:, j]) / dp)
-        batch.boundary = restore
-    return slope
 
 
 def _cubic(S, value, slope):
@@ -387,6 +439,14 @@ def _record(times, nxt, rows, before, after, write, mass=False):
         s = np.clip((times[k] - t0[hit])[:, None] / h, 0.0, 1.0)
         write(r, k, *hermite_step(s, h, y0[hit], d0[hit], y1[hit], d1[hit]))
         nxt[r] += 1
+
+
+def _shared(shape):
+    """A float array in memory shared with processes forked after it (zeros)."""
+    import mmap
+
+    size = int(np.prod(shape))
+    return np.frombuffer(mmap.mmap(-1, max(8 * size, 8)), dtype=float, count=size).reshape(shape)
 
 
 def _cell_corners(corners, cells):

@@ -486,6 +486,21 @@ def test_cells_on_different_hub_nodes_are_one_group_and_match_single_rate():
     assert np.abs(ref.pressure("line0") - ref.pressure("line1")).max() > 1.0
 
 
+def test_cells_split_over_two_processes_give_the_one_process_result(monkeypatch):
+    """Two worker processes, each integrating half of the cells (outputs in shared
+    memory, the hub in the parent), give what one process gives."""
+    from pneunet.engine import multirate
+
+    one = two_by_two_manifolds("multirate", 1e-6).tran(3.0, t_step=0.01)
+    assert one.stats["processes"] == 1
+    monkeypatch.setattr(multirate, "PARALLEL_MIN_BATCHED", 10)
+    two = two_by_two_manifolds("multirate", 1e-6).tran(3.0, t_step=0.01)
+    assert two.stats["processes"] == 2 and two.stats["cells"] == 40
+    for node in ["line0", "line1", "exh0", "exh1"] + [f"act{k}" for k in range(40)]:
+        np.testing.assert_allclose(two.pressure(node), one.pressure(node), rtol=1e-6)
+    assert two.stats["steps"] == pytest.approx(one.stats["steps"], rel=0.01)
+
+
 def test_cells_of_another_structure_form_another_group():
     from pneunet.engine.partition import partition
 
@@ -512,7 +527,8 @@ def test_worth_partitioning_says_why_not():
                                                                {"line"})
 
 
-def test_a_failure_keeps_the_finished_windows(monkeypatch):
+@pytest.mark.parametrize("processes", [1, 2])
+def test_a_failure_keeps_the_finished_windows(monkeypatch, processes):
     """A cell whose steps collapse mid-run: SolverError with the solution up to the last
     accepted window (finite, ending before the failure), as single-rate failures keep theirs."""
     from pneunet.engine.solvers import radau
@@ -527,9 +543,14 @@ def test_a_failure_keeps_the_finished_windows(monkeypatch):
                               where="node act0")
         real(problem, st, active, h, systems)
     monkeypatch.setattr(radau, "_check_step", collapse_late)
+    if processes == 2:  # the failure happens in a worker process
+        from pneunet.engine import multirate
+
+        monkeypatch.setattr(multirate, "PARALLEL_MIN_BATCHED", 10)
     with pytest.raises(SolverError) as caught:
         independent_cells(20, 1e-5, "multirate").tran(4.0, t_step=0.01)
     partial = caught.value.partial
     assert partial is not None and partial.stats["failed"]
+    assert partial.stats["processes"] == processes
     assert 0.0 < partial.t[-1] <= 2.0 + 1e-9 and partial.t[0] == 0.0
     assert np.all(np.isfinite(partial.pressure("act0"))) and np.all(np.isfinite(partial.pressure("line")))
