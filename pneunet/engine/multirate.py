@@ -52,7 +52,7 @@ COUPLING_TOL = 30          # accepted hub-sample change between sweeps, in local
 DEFAULT_OUTPUTS = 1000     # output points when the .tran gives no step
 PARALLEL_WORKERS = 2
 PARALLEL_MIN_CELLS = 8     # independent cells from which they run in worker processes
-PARALLEL_MIN_BATCHED = 1000  # batched cells from which they are split over worker processes
+PARALLEL_MIN_BATCHED = 300   # batched cells from which they are split over worker processes
 
 
 def transient(circuit, part: Partition, t_stop: float, t_step: float | None, t_start: float,
