@@ -22,11 +22,11 @@ _PR_SET_PDEATHSIG = 1
 
 def process_pool(workers: int):
     """A fork-based ``ProcessPoolExecutor`` of ``workers`` guarded processes, or None
-    when fork is not available or ``workers`` < 2."""
+    when this process cannot fork workers (:func:`can_fork`) or ``workers`` < 2."""
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
 
-    if workers < 2 or "fork" not in multiprocessing.get_all_start_methods():
+    if workers < 2 or not can_fork():
         return None
     return ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("fork"),
                                initializer=_guard, initargs=(os.getpid(),))
@@ -82,11 +82,13 @@ class Servant:
         self._conn.close()
 
 
-def servants_available() -> bool:
-    """Whether :class:`Servant` can fork here."""
+def can_fork() -> bool:
+    """Whether this process may fork workers: fork exists here, and this is not a
+    daemonic process (a multiprocessing pool's or a dask worker), which may have none."""
     import multiprocessing
 
-    return "fork" in multiprocessing.get_all_start_methods()
+    return ("fork" in multiprocessing.get_all_start_methods()
+            and not multiprocessing.current_process().daemon)
 
 
 def _serve(make, args, conn, parent: int) -> None:

@@ -43,7 +43,7 @@ from .solution import Solution, build_solution
 from .solvers import radau
 from .solvers.interpolate import hermite_step
 from ..errors import SolverError
-from ..workers import Servant, process_pool, servants_available
+from ..workers import Servant, can_fork, process_pool
 
 SAMPLES = 8                # hub sample intervals per window: at least,
 MAX_SAMPLES = 64           # at most; else one per step of the hub (once it has taken one)
@@ -69,7 +69,7 @@ def transient(circuit, part: Partition, t_stop: float, t_step: float | None, t_s
     alone = [c for c in part.cells if any(n in algebraic for n in c.nodes)]
     batched = [ids for ids in part.groups
                if not any(n in algebraic for n in part.cells[ids[0]].nodes)]
-    split = servants_available() and sum(map(len, batched)) >= PARALLEL_MIN_BATCHED
+    split = can_fork() and sum(map(len, batched)) >= PARALLEL_MIN_BATCHED
     out = _shared((times.size, dae.n)) if split else np.empty((times.size, dae.n))
     out[0] = y0
     corners = dae.instance_corners(t_start, t_stop)

@@ -501,6 +501,27 @@ def test_cells_split_over_two_processes_give_the_one_process_result(monkeypatch)
     assert two.stats["steps"] == pytest.approx(one.stats["steps"], rel=0.01)
 
 
+def _multirate_in_a_worker(n):
+    sol = two_by_two_manifolds("multirate", 1e-6, n).tran(1.0, t_step=0.05)
+    return sol.stats["processes"], float(sol.pressure("act0")[-1])
+
+
+def test_multirate_inside_a_daemonic_worker_stays_in_its_process(monkeypatch):
+    """A daemonic process (a multiprocessing pool's, a dask worker) may not fork: the
+    multirate run then keeps its cells in that process, with the same result."""
+    import multiprocessing
+
+    from pneunet.engine import multirate
+
+    monkeypatch.setattr(multirate, "PARALLEL_MIN_BATCHED", 10)
+    here = _multirate_in_a_worker(40)
+    assert here[0] == 2
+    with multiprocessing.get_context("fork").Pool(1) as pool:
+        there = pool.apply(_multirate_in_a_worker, (40,))
+    assert there[0] == 1
+    assert there[1] == pytest.approx(here[1], rel=1e-6)
+
+
 def test_cells_of_another_structure_form_another_group():
     from pneunet.engine.partition import partition
 
