@@ -129,8 +129,10 @@ class Corners:
 
 
 def wrms(x: np.ndarray, weights: np.ndarray) -> np.ndarray:
-    """Weighted RMS norm of each row (G,)."""
-    return np.sqrt(np.mean((x * weights) ** 2, axis=1))
+    """Weighted RMS norm of each row (G,) (einsum: numpy's mean over a short last axis
+    is 2× slower)."""
+    scaled = x * weights
+    return np.sqrt(np.einsum("gk,gk->g", scaled, scaled) / x.shape[-1])
 
 
 def start(problem, t0: float, Y: np.ndarray, span: float, rtol: float, atol: float) -> BatchState:
@@ -275,9 +277,19 @@ def _inverse(m):
 
 
 def _apply(inverse, v):
-    """inverse (G, k, k) times v (G, k), for small k."""
-    return np.einsum("gab,gb->ga", inverse, v) if v.shape[-1] > 4 else \
-        (inverse * v[:, None, :]).sum(axis=-1)
+    """inverse (G, k, k) times v (G, k): for k ≤ 4 as k² multiply-adds of (G,) columns
+    (at 1,500 cells 5× faster than a broadcast product summed over its last axis)."""
+    k = v.shape[-1]
+    if k > 4:
+        return np.einsum("gab,gb->ga", inverse, v)
+    out = np.empty(np.broadcast_shapes(inverse.shape[:-1], v.shape),
+                   dtype=np.result_type(inverse, v))
+    for a in range(k):
+        row = inverse[:, a, 0] * v[:, 0]
+        for b in range(1, k):
+            row += inverse[:, a, b] * v[:, b]
+        out[:, a] = row
+    return out
 
 
 def _mix(matrix, stages):
@@ -303,7 +315,8 @@ def _solve_stages(problem, st, h, inverse, weights, active, count):
             residual[i], outflow[i] = problem.evaluate(stage_times[i], st.Y + Z[i], rates[i])
         count.residuals += 3
         delta = _newton_update(inverse, residual)
-        size = np.sqrt(np.mean((delta * weights[None]) ** 2, axis=(0, 2)))
+        scaled = delta * weights[None]
+        size = np.sqrt(np.einsum("igk,igk->g", scaled, scaled) / (3 * k))
         Z = Z + np.where((active & ~ok)[None, :, None], delta, 0.0)
         if previous is not None:
             rate = size / np.maximum(previous, 1e-300)
@@ -327,21 +340,25 @@ def _newton_update(inverse, residual):
     return -_mix(T, np.stack([w0, u.real, u.imag]))
 
 
+_NODES = (0.0, C[0], C[1], C[2])      # the collocation polynomial's nodes, units of h
+_LAGRANGE = [1.0 / np.prod([_NODES[j] - _NODES[m] for m in range(4) if m != j])
+             for j in range(4)]         # 1 / Π_{m≠j}(x_j − x_m)
+
+
 def _extrapolate(Z, ratio):
     """Stage increments for the next step (length ratio·h) from the collocation
-    polynomial of the last one, u(0) = 0, u(c_i) = Z_i (G, 3, k): Hairer's start."""
-    nodes = np.array([0.0, C[0], C[1], C[2]])
-    s = 1.0 + C[None, :] * ratio[:, None]                       # (G, 3) in units of h_last
-    basis = np.ones(s.shape + (3,))
-    for j in range(1, 4):
-        for m in range(4):
-            if m != j:
-                basis[..., j - 1] *= (s - nodes[m]) / (nodes[j] - nodes[m])
-    # Σ_j basis[g, i, j]·Z[j, g, :] (einsum's generic path costs ~10× this at 1,000 cells)
-    out = basis[:, :, 0].T[:, :, None] * Z[0][None]
-    for j in (1, 2):
-        out += basis[:, :, j].T[:, :, None] * Z[j][None]
-    return out - Z[2][None]
+    polynomial of the last one, u(0) = 0, u(c_i) = Z_i (3, G, k): Hairer's start."""
+    s = 1.0 + C[:, None] * ratio[None, :]                     # (3, G) in units of h_last
+    diff = [s - x for x in _NODES]
+    # Lagrange basis of nodes 1–3 at the new stage times (node 0 carries u = 0)
+    d0, d1, d2, d3 = diff
+    weight = [(_LAGRANGE[1] * d0) * (d2 * d3), (_LAGRANGE[2] * d0) * (d1 * d3),
+              (_LAGRANGE[3] * d0) * (d1 * d2)]
+    out = np.empty_like(Z)
+    for c in range(Z.shape[2]):  # column by column: numpy is slow on a last axis of 2
+        out[:, :, c] = (weight[0] * Z[0][:, c] + weight[1] * Z[1][:, c]
+                        + weight[2] * Z[2][:, c] - Z[2][:, c])
+    return out
 
 
 def _error_estimate(real_inv, mass, Yd, Z, h):
