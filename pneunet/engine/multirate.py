@@ -175,7 +175,7 @@ class _Group:
             next_sample = np.ones(self.batch.G, dtype=int)
 
         def on_step(rows, before, after):
-            _record(self.times, self.next_out, rows, before, after, self._write)
+            _record(self.times, self.next_out, rows, before, after, self._write, slopes=False)
             if S is not None:
                 _record(S, next_sample, rows, before, after, lambda r, k, m, q: (
                     np.add.at(mass, (k[:, None], cols[r]), m),
@@ -291,7 +291,7 @@ class _Hub:
         corners = radau.Corners([np.union1d(land, self.own_corners[inside])], [self.own_jumps])
 
         def on_step(rows, before, after):
-            _record(self.times, self.next_out, rows, before, after, self._write)
+            _record(self.times, self.next_out, rows, before, after, self._write, slopes=False)
             _record(S, next_sample, rows, before, after,
                     lambda r, k, y, d: (values.__setitem__(k, y), rates.__setitem__(k, d)))
         radau.advance(self.batch, self.state, S[-1], opts.rtol, opts.atol, corners,
@@ -421,10 +421,11 @@ def _values(curve):
     return lambda t: curve(t)[0]
 
 
-def _record(times, nxt, rows, before, after, write, mass=False):
+def _record(times, nxt, rows, before, after, write, mass=False, slopes=True):
     """For each step that passed one of ``times`` (shared, increasing), write the
-    cubic Hermite interpolant's value and slope there; ``nxt`` is each system's next
-    time index.  ``mass``: interpolate the drawn mass M (rate Q), not the state."""
+    cubic Hermite interpolant's value and slope (None without ``slopes``) there; ``nxt``
+    is each system's next time index.  ``mass``: interpolate the drawn mass M (rate Q),
+    not the state."""
     t0, Y0, Yd0, Q0, M0 = before
     t1, Y1, Yd1, Q1, M1 = after
     y0, d0, y1, d1 = (M0, Q0, M1, Q1) if mass else (Y0, Yd0, Y1, Yd1)
@@ -437,7 +438,7 @@ def _record(times, nxt, rows, before, after, write, mass=False):
         r, k = rows[hit], k[hit]
         h = (t1[hit] - t0[hit])[:, None]
         s = np.clip((times[k] - t0[hit])[:, None] / h, 0.0, 1.0)
-        write(r, k, *hermite_step(s, h, y0[hit], d0[hit], y1[hit], d1[hit]))
+        write(r, k, *hermite_step(s, h, y0[hit], d0[hit], y1[hit], d1[hit], slopes))
         nxt[r] += 1
 
 

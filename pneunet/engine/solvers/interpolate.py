@@ -15,15 +15,19 @@ def hermite(t: np.ndarray, y: np.ndarray, yp: np.ndarray, times: np.ndarray) -> 
     the rows ``y``, ``yp`` (k, n) at the increasing times ``t`` (k,); shape (m, n)."""
     k = np.clip(np.searchsorted(t, times, side="right") - 1, 0, len(t) - 2)
     h = (t[k + 1] - t[k])[:, None]
-    return hermite_step((times - t[k])[:, None] / h, h, y[k], yp[k], y[k + 1], yp[k + 1])[0]
+    return hermite_step((times - t[k])[:, None] / h, h, y[k], yp[k], y[k + 1], yp[k + 1],
+                        slope=False)[0]
 
 
-def hermite_step(s, h, y0, d0, y1, d1):
+def hermite_step(s, h, y0, d0, y1, d1, slope=True):
     """Value and slope of the cubic through (y0, slope d0) and (y1, d1) over a step of
-    length h, at the fractions s of the step (arrays broadcasting together)."""
+    length h, at the fractions s of the step (arrays broadcasting together); the slope
+    is None unless asked for."""
     s2, s3 = s * s, s * s * s
     value = ((2 * s3 - 3 * s2 + 1) * y0 + (s3 - 2 * s2 + s) * h * d0
              + (3 * s2 - 2 * s3) * y1 + (s3 - s2) * h * d1)
+    if not slope:
+        return value, None
     slope = ((6 * s2 - 6 * s) * (y0 - y1) / h + (3 * s2 - 4 * s + 1) * d0
              + (3 * s2 - 2 * s) * d1)
     return value, slope
