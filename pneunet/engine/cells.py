@@ -78,6 +78,7 @@ class CellBatch:
         self.boundary_cols = np.broadcast_to(np.arange(self.nb), (self.G, self.nb))
         self.injection = None
         self._build_maps(cells)
+        self._whole = _Rows(self, np.arange(self.G))  # every cell
         self._view = None  # the last subset evaluator (see rows)
 
     def _build_maps(self, cells):
@@ -92,8 +93,6 @@ class CellBatch:
         self._pinned = []
         for family, nodes in dae._pinned:
             self._pinned.append((family, nodes, np.maximum(cell_of[nodes[:, 0]], 0)))
-        self._flow_to = np.concatenate([b.port_node.ravel() for b in dae._blocks]) \
-            if dae._blocks else np.empty(0, int)
         self._n_all = n_all
         # CSC data position of each (cell, row, column) entry of the blocks (nnz: zero)
         pos = np.full((self.G, self.k, self.k), dae.nnz)
@@ -106,54 +105,23 @@ class CellBatch:
             raise AssertionError("cells of a batch are coupled")  # partition guarantees not
         pos[owner[rows], local[rows], local[cols]] = np.arange(dae.nnz)
         self._pos = pos
-        self._data = np.zeros(dae.nnz + 1)
         self.differential = dae.differential[self.idx[0]]
         # the cell of each instance of each family with a port at an unknown node
         self._instance_cell = [cell_of[b.port_node].max(axis=1) for b in dae._active]
-        self._inputs = _Inputs(self._pinned, self._boundary_idx if self.nb else None,
-                               lambda: self.boundary_cols)
-
-    def _pressures(self, t, Y, Yd):
-        return self._inputs.fill(self, self.idx, t, Y, Yd)
 
     def evaluate(self, t, Y, Yd, jacobian=False):
         """R (G, k) and the boundary outflows (G, nb), mg/s; with ``jacobian`` also the
         blocks ∂F/∂y and ∂F/∂ẏ (G, k, k).  ``t`` (G,): each cell's time (s)."""
-        dae = self.dae
-        p, pdot = self._pressures(t, Y, Yd)
-        flows, by_p = dae._flow_buffer, dae._partial_buffer
-        if jacobian:
-            by_pdot = np.zeros_like(by_p)
-        t_scalar = float(t[0]) if self.G == 1 else np.nan
-        for block in dae._active:
-            nodes = block.port_node
-            if not jacobian:
-                q = block.family.flows(t_scalar, p[nodes], pdot[nodes])
-            else:
-                q, dq_dp, dq_dpdot = block.family.outflows(t_scalar, p[nodes], pdot[nodes])
-                by_p[block.partials] = dq_dp.ravel()
-                if dq_dpdot is not None:
-                    by_pdot[block.partials] = dq_dpdot.ravel()
-            flows[block.flows] = q.ravel()
-        total = np.bincount(self._flow_to, weights=flows, minlength=self._n_all)
-        res = total[self.idx]
-        slopes = None
-        if self.injection is not None:
-            flows, slopes = self.injection(t, Y)
-            res = res + flows
-        out = total[self._boundary_idx]
+        result = self._whole.evaluate(t, Y, Yd, jacobian)
+        if self.injection is None:
+            return result
+        flows, slopes = self.injection(t, Y)
         if not jacobian:
-            return res, out
-        jac = self._blocks_of(by_p)
+            return result[0] + flows, result[1]
+        res, out, jac, mass = result
         if slopes is not None:
             jac[:, np.arange(self.k), np.arange(self.k)] += slopes
-        return res, out, jac, self._blocks_of(by_pdot)
-
-    def _blocks_of(self, partials):
-        nnz = self.dae.nnz
-        self._data[:-1] = np.bincount(self.dae._partial_to, weights=partials,
-                                      minlength=nnz + 1)[:nnz]
-        return self._data[self._pos]
+        return res + flows, out, jac, mass
 
     def rows(self, active: np.ndarray):
         """An evaluator of (at least) the cells ``active`` (sorted indices) and the cells
@@ -223,8 +191,8 @@ def consistent_rates(problem, t, Y, Yd_guess):
 
 
 class _Rows:
-    """Residuals and Newton blocks of the cells ``rows`` of a batch alone: the same
-    numbers as the whole batch gives for them, from their element instances only."""
+    """Residuals and Newton blocks of the cells ``rows`` of a batch (all of them, or a
+    subset: the same numbers for those cells, from their element instances only)."""
 
     def __init__(self, batch: CellBatch, rows: np.ndarray):
         self.batch, self.rows, self.G = batch, rows, rows.size
@@ -272,12 +240,14 @@ class _Rows:
         batch = self.batch
         m, k, nb = self.rows.size, batch.k, batch.nb
         p, pdot = self._inputs.fill(batch, self.idx, t, Y, Yd)
+        # the hub (a batch of one) may hold elements that depend on time; cells do not
+        time = float(t[0]) if batch.G == 1 else np.nan
         flows, by_p, by_pdot = [], [], []
         for family, nodes in self.blocks:
             if not jacobian:
-                flows.append(family.flows(np.nan, p[nodes], pdot[nodes]).ravel())
+                flows.append(family.flows(time, p[nodes], pdot[nodes]).ravel())
                 continue
-            q, dq_dp, dq_dpdot = family.outflows(np.nan, p[nodes], pdot[nodes])
+            q, dq_dp, dq_dpdot = family.outflows(time, p[nodes], pdot[nodes])
             flows.append(q.ravel())
             by_p.append(dq_dp.ravel())
             by_pdot.append(np.zeros(dq_dp.size) if dq_dpdot is None else dq_dpdot.ravel())

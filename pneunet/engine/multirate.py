@@ -148,7 +148,7 @@ class _Group:
 
     def draw_now(self):
         """The cells' draw from each hub node now (n_hub,), mg/s."""
-        return self.drawn_now(self.state.Q)
+        return self._per_hub(self.state.Q)
 
     def earliest(self) -> float:
         """The time (s) every cell has reached."""
@@ -171,7 +171,7 @@ class _Group:
         cols = self.hub_cols
         if S is not None:
             mass, rate = np.zeros((S.size, self.n_hub)), np.zeros((S.size, self.n_hub))
-            mass[0], rate[0] = self.drawn_now(self.state.M), self.drawn_now(self.state.Q)
+            mass[0], rate[0] = self._per_hub(self.state.M), self._per_hub(self.state.Q)
             next_sample = np.ones(self.batch.G, dtype=int)
 
         def on_step(rows, before, after):
@@ -184,7 +184,7 @@ class _Group:
                       on_step, count)
         return count, ((mass, rate) if S is not None else None)
 
-    def drawn_now(self, per_cell):
+    def _per_hub(self, per_cell):
         """Per hub node (n_hub,): the sum of the cells' ``per_cell`` (G, nb) drawn from it."""
         total = np.zeros(self.n_hub)
         np.add.at(total, self.hub_cols, per_cell)
