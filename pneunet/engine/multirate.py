@@ -48,6 +48,7 @@ from ..workers import Servant, can_fork, process_pool
 SAMPLES = 8                # hub sample intervals per window: at least,
 MAX_SAMPLES = 64           # at most; else one per step of the hub (once it has taken one)
 MAX_SWEEPS = 6             # waveform-relaxation sweeps before a window is halved
+ANDERSON_DEPTH = 3         # earlier sweeps the next hub samples are mixed from
 COUPLING_TOL = 30          # accepted hub-sample change between sweeps, in local tolerances
 DEFAULT_OUTPUTS = 1000     # output points when the .tran gives no step
 PARALLEL_WORKERS = 2
@@ -358,6 +359,7 @@ def _relax(groups, hub, t_start, t_stop, opts, count, done) -> dict:
             group.save()
         saved_hub = hub.snapshot()
         slope = sum(group.draw_slope() for group in groups)
+        history = _Anderson(opts)
         for sweep in range(1, MAX_SWEEPS + 1):
             sweeps += 1
             mass, rate = np.zeros_like(p[0]), np.zeros_like(p[0])
@@ -377,7 +379,7 @@ def _relax(groups, hub, t_start, t_stop, opts, count, done) -> dict:
                 change = _change(new, p, opts)
                 if change <= COUPLING_TOL:
                     break
-            p = new
+            p = history.next(p, new)
         else:
             for group in groups:
                 group.restore()
@@ -391,6 +393,34 @@ def _relax(groups, hub, t_start, t_stop, opts, count, done) -> dict:
         H *= 2.0 if sweep <= 2 else 1.3 if sweep == 3 else 1.0 if sweep == 4 else 0.7
     return dict(windows=windows, sweeps=sweeps, window_halvings=halvings,
                 coupling_defect=worst)
+
+
+class _Anderson:
+    """Anderson acceleration of the hub's waveform iteration: the next samples the cells
+    see are the combination of the last :data:`ANDERSON_DEPTH` hub results whose
+    residuals (result − what the cells saw, values and slopes, each in its own local
+    tolerances) combine to the smallest in the least-squares sense."""
+
+    def __init__(self, opts):
+        self.opts = opts
+        self.seen, self.results = [], []
+
+    def next(self, seen, result):
+        """The hub samples (value, slope) for the next sweep, after the cells saw
+        ``seen`` and the hub came out as ``result``."""
+        self.seen.append(np.concatenate([a.ravel() for a in seen]))
+        self.results.append(np.concatenate([a.ravel() for a in result]))
+        del self.seen[:-ANDERSON_DEPTH - 1], self.results[:-ANDERSON_DEPTH - 1]
+        if len(self.seen) < 2:
+            return result
+        x, g = np.array(self.seen), np.array(self.results)
+        r = (g - x) / (self.opts.rtol * np.abs(g[-1]) + self.opts.atol)
+        gamma = np.linalg.lstsq(np.diff(r, axis=0).T, r[-1], rcond=1e-10)[0]
+        mixed = g[-1] - gamma @ np.diff(g, axis=0)
+        if not np.all(np.isfinite(mixed)):
+            return result
+        n = result[0].size
+        return mixed[:n].reshape(result[0].shape), mixed[n:].reshape(result[1].shape)
 
 
 def _change(new, seen, opts) -> float:
