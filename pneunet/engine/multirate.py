@@ -47,6 +47,7 @@ from ..workers import Servant, can_fork, process_pool
 
 SAMPLES = 8                # hub sample intervals per window: at least,
 MAX_SAMPLES = 64           # at most; else one per step of the hub (once it has taken one)
+FIRST_WINDOW = 1 / 200     # of the span: the start is the least settled; windows grow from it
 MAX_SWEEPS = 6             # waveform-relaxation sweeps before a window is halved
 ANDERSON_DEPTH = 3         # earlier sweeps the next hub samples are mixed from
 COUPLING_TOL = 30          # accepted hub-sample change between sweeps, in local tolerances
@@ -135,7 +136,7 @@ class _Group:
         self.t_start, self.span = t_start, t_stop - t_start
         self.y0 = y0[self.cols]
         self.state = None
-        self._saved = None
+        self._saved = self._guide = self._recorded = None
 
     def begin(self, opts):
         if self.state is None:
@@ -175,14 +176,22 @@ class _Group:
             mass[0], rate[0] = self._per_hub(self.state.M), self._per_hub(self.state.Q)
             next_sample = np.ones(self.batch.G, dtype=int)
 
+        ends = ([], [])  # every accepted step's system and end: the next sweep's guide
+
         def on_step(rows, before, after):
             _record(self.times, self.next_out, rows, before, after, self._write, slopes=False)
+            ends[0].append(rows)
+            ends[1].append(after[0])
             if S is not None:
                 _record(S, next_sample, rows, before, after, lambda r, k, m, q: (
                     np.add.at(mass, (k[:, None], cols[r]), m),
                     np.add.at(rate, (k[:, None], cols[r]), q)), mass=True)
+        start = self.state.t.min()
         radau.advance(self.batch, self.state, t_end, opts.rtol, opts.atol, self.corners,
-                      on_step, count)
+                      on_step, count, self._guide)
+        if S is not None and ends[0]:
+            self._recorded = radau.StepGuide(self.batch.G, start, np.concatenate(ends[0]),
+                                             np.concatenate(ends[1]))
         return count, ((mass, rate) if S is not None else None)
 
     def _per_hub(self, per_cell):
@@ -216,12 +225,16 @@ class _Group:
     def save(self):
         """Keep the state, to :meth:`restore` it (the start of a window)."""
         self._saved = self.state.copy(), self.corners.next.copy(), self.next_out.copy()
+        self._recorded = self._guide = None
 
     def restore(self):
+        """Back to the start of the window, to step as the last sweep did (its steps
+        proposed again: :class:`~pneunet.engine.solvers.radau.StepGuide`)."""
         state, corners, next_out = self._saved
         self.state = state.copy()
         self.corners.next[:] = corners
         self.next_out[:] = next_out
+        self._guide, self._recorded = self._recorded, None
 
 
 class _GroupProcess:
@@ -337,7 +350,7 @@ def _relax(groups, hub, t_start, t_stop, opts, count, done) -> dict:
         group.begin(opts)
         draw += group.draw_now()
     hub.begin(draw, opts)
-    T, H = t_start, (t_stop - t_start) / 50
+    T, H = t_start, FIRST_WINDOW * (t_stop - t_start)
     windows = sweeps = halvings = 0
     worst = 0.0
     while T < t_stop - 1e-12 * max(1.0, abs(t_stop)):
@@ -348,11 +361,13 @@ def _relax(groups, hub, t_start, t_stop, opts, count, done) -> dict:
                                                             SAMPLES, MAX_SAMPLES))
         S = T + H * np.arange(m + 1) / m
         S[-1] = T + H
-        land = S[1:-1]  # the hub's steps land here: its integral of the draw is exact
         # the output times inside are samples of the draw too
         outputs = hub.times[(hub.times > T) & (hub.times < T + H)]
         S = np.union1d(S, outputs[np.min(np.abs(outputs[:, None] - S[None, :]), axis=1)
                                   > 1e-9 * H]) if outputs.size else S
+        # the hub's steps land on every sample (the knots of its piecewise-cubic draw):
+        # its integral of the draw is exact, so it loses what the cells drew
+        land = S[1:-1]
         p = (hub.state.Y[0] + (S - T)[:, None] * hub.state.Yd[0],
              np.repeat(hub.state.Yd, S.size, axis=0))
         for group in groups:

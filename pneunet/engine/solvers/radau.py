@@ -116,16 +116,62 @@ class Corners:
 
     def upcoming(self, t: np.ndarray, rows: np.ndarray) -> np.ndarray:
         """The next corner (s) after the times ``t`` of the systems ``rows`` (inf: none)."""
-        while True:
-            behind = self.times[rows, self.next[rows]] <= t * (1 + 1e-13) + 1e-13
-            if not behind.any():
-                return self.times[rows, self.next[rows]]
-            self.next[rows[behind]] += 1
+        return _upcoming(self.times, self.next, t, rows)
 
     def jumps_at(self, rows: np.ndarray, t: np.ndarray) -> np.ndarray:
         """Those of ``rows`` whose next corner is a jump at their time ``t``."""
         k = self.next[rows]
         return rows[self.jump[rows, k] & (self.times[rows, k] == t)]
+
+
+class StepGuide:
+    """The step ends (s) each system accepted in an earlier integration from the same
+    start (the previous waveform-relaxation sweep of a window), proposed again: a
+    system on that grid retakes a step that passed there instead of the controller's
+    guess, which the error test may reject again.  Every step still passes the error
+    test; only the proposals change."""
+
+    def __init__(self, G: int, start: float, rows: np.ndarray, ends: np.ndarray):
+        order = np.lexsort((ends, rows))
+        rows, ends = rows[order], ends[order]
+        counts = np.bincount(rows, minlength=G)
+        first = np.concatenate([[0], np.cumsum(counts)[:-1]])
+        self.times = np.full((G, counts.max(initial=0) + 2), np.inf)
+        self.times[:, 0] = start                  # every system starts on its grid
+        self.times[rows, 1 + np.arange(rows.size) - first[rows]] = ends
+        self.next = np.zeros(G, dtype=int)
+        self.refused = np.zeros(G, dtype=bool)   # a proposal failed; not again until a step passes
+        self._following = None
+
+    def propose(self, t, h_controller, h, limit, rows):
+        """Step sizes (s) for the systems ``rows`` at times ``t``: to the next recorded
+        end where that lies within ``limit`` (their next corner or target) and the
+        system is on the recorded grid (or the end is within 0.5–1.5 of the
+        controller's step ``h_controller``); else ``h`` (the controller's)."""
+        ahead = _upcoming(self.times, self.next, t, rows) - t
+        previous = self.times[rows, self.next[rows] - 1]
+        on_grid = np.abs(t - previous) <= 1e-13 * np.maximum(1.0, np.abs(t))
+        near = (ahead >= 0.5 * h_controller) & (ahead <= 1.5 * h_controller)
+        follow = ((on_grid & (ahead <= 2.0 * h_controller)) | near) & (t + ahead <= limit) \
+            & ~self.refused[rows]
+        self._following = follow
+        return np.where(follow, ahead, h)
+
+    def settle(self, rows, active, accepted):
+        """After the attempt: the systems ``rows`` whose proposal failed stop following
+        until they pass a step of the controller's."""
+        self.refused[rows[active & self._following & ~accepted]] = True
+        self.refused[rows[accepted & ~self._following]] = False
+
+
+def _upcoming(times, nxt, t, rows):
+    """The next of each system's sorted ``times`` after its time ``t``, advancing its
+    pointer ``nxt`` past those behind (inf: none left)."""
+    while True:
+        behind = times[rows, nxt[rows]] <= t * (1 + 1e-13) + 1e-13
+        if not behind.any():
+            return times[rows, nxt[rows]]
+        nxt[rows[behind]] += 1
 
 
 def wrms(x: np.ndarray, weights: np.ndarray) -> np.ndarray:
@@ -148,8 +194,10 @@ def start(problem, t0: float, Y: np.ndarray, span: float, rtol: float, atol: flo
 
 
 def advance(problem, st: BatchState, t_end: float, rtol: float, atol: float,
-            corners: Corners | None = None, on_step=None, count: Counters | None = None):
-    """Step every system of ``st`` to ``t_end`` (s), landing on its corners.
+            corners: Corners | None = None, on_step=None, count: Counters | None = None,
+            guide: StepGuide | None = None):
+    """Step every system of ``st`` to ``t_end`` (s), landing on its corners, with the
+    step proposals of ``guide`` where given.
 
     ``on_step(rows, before, after)`` is called after each pass with the systems that
     took a step and their (t, Y, Yd, Q, M) before and after it.  A problem with a
@@ -167,15 +215,17 @@ def advance(problem, st: BatchState, t_end: float, rtol: float, atol: float,
         count.passes += 1
         rows, view = subset(np.flatnonzero(active)) if subset is not None else (None, None)
         if rows is None:
-            _pass(problem, st, everyone, active, t_end, tiny, rtol, atol, corners, on_step, count)
+            _pass(problem, st, everyone, active, t_end, tiny, rtol, atol, corners, on_step, count,
+                  guide)
         else:
             part = st.take(rows)
             _pass(view, part, rows, active[rows], t_end, tiny, rtol, atol, corners, on_step,
-                  count)
+                  count, guide)
             st.put(rows, part)
 
 
-def _pass(problem, st, systems, active, t_end, tiny, rtol, atol, corners, on_step, count):
+def _pass(problem, st, systems, active, t_end, tiny, rtol, atol, corners, on_step, count,
+          guide=None):
     """One step attempt of the ``active`` systems of ``st``; ``systems`` are their
     indices in the whole batch (corners, callbacks and messages use those)."""
     G = st.Y.shape[0]
@@ -184,6 +234,8 @@ def _pass(problem, st, systems, active, t_end, tiny, rtol, atol, corners, on_ste
         target = np.minimum(target, corners.upcoming(st.t, systems))
     room = target - st.t
     h = np.where(room <= st.h, room, np.where(room < 1.5 * st.h, 0.5 * room, st.h))
+    if guide is not None:
+        h = guide.propose(st.t, st.h, h, target + tiny, systems)
     h = np.where(active, h, 1.0)
     _check_step(problem, st, active, h, systems)
     weights = 1.0 / (rtol * np.abs(st.Y) + atol)
@@ -195,6 +247,8 @@ def _pass(problem, st, systems, active, t_end, tiny, rtol, atol, corners, on_ste
     error = _error_estimate(newton[0], mass, st.Yd, Z, h)
     err = _norm(error, weights, problem.differential)
     accepted = active & ok & (err <= 1.0)
+    if guide is not None:
+        guide.settle(systems, active, accepted)
     new_h = _next_step(st, h, err, iterations, accepted)
     # Newton failed: at least halve, more when the (unconverged) error says so — a
     # step across a kink of the flow laws then takes fewer attempts
