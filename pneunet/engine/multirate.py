@@ -273,23 +273,30 @@ class _Hub:
         self.y0, self.t_start = y0[self.cols][None, :], t_start
         self.batch.injection = self._injection
         self._draw = self._seen = None
+        self._inputs = {}  # time (s) → (draw, seen pressures) at it
         self.slope = 0.0
         self.state = None
 
     def begin(self, draw, opts):
         """The hub's state at the start, the cells drawing ``draw`` (n_hub,) mg/s."""
         self._draw = lambda t: (None, np.broadcast_to(draw, (len(t), draw.size)))
+        self._inputs.clear()
         self.state = radau.start(self.batch, self.t_start, self.y0, self.times[-1] - self.t_start,
                                  opts.rtol, opts.atol)
 
     def _injection(self, t, Y):
-        """The cells' draw at times t, corrected by its slope for the difference
+        """The cells' draw at times t (1,), corrected by its slope for the difference
         between the hub's pressure and the one the cells saw."""
-        rate = self._draw(t)[1]
-        if self._seen is None:
+        key = float(t[0])  # a pass evaluates each of its stage times several times
+        if key not in self._inputs:
+            if len(self._inputs) > 16:
+                self._inputs.clear()
+            self._inputs[key] = (self._draw(t)[1],
+                                 None if self._seen is None else self._seen(t)[0])
+        rate, seen = self._inputs[key]
+        if seen is None:
             return rate, None
-        return (rate + self.slope * (Y - self._seen(t)[0]),
-                np.broadcast_to(self.slope, Y.shape))
+        return rate + self.slope * (Y - seen), np.broadcast_to(self.slope, Y.shape)
 
     def advance(self, S, land, drawn, seen, slope, opts, count):
         """Integrate across the window ``S`` with the cells' draw ``drawn`` (mass and
@@ -298,6 +305,7 @@ class _Hub:
         landing on the times ``land``; return the hub's pressures and their rates at S
         (M + 1, n_hub) each."""
         self._draw, self._seen, self.slope = _cubic(S, *drawn), _cubic(S, *seen), slope
+        self._inputs.clear()
         values, rates = np.empty((S.size, self.batch.k)), np.empty((S.size, self.batch.k))
         values[0], rates[0] = self.state.Y[0], self.state.Yd[0]
         next_sample = np.ones(1, dtype=int)
@@ -474,17 +482,19 @@ def _record(times, nxt, rows, before, after, write, mass=False, slopes=True):
     t0, Y0, Yd0, Q0, M0 = before
     t1, Y1, Yd1, Q1, M1 = after
     y0, d0, y1, d1 = (M0, Q0, M1, Q1) if mass else (Y0, Yd0, Y1, Yd1)
-    last = times.size - 1
-    while True:
-        k = nxt[rows]
-        hit = np.flatnonzero((k <= last) & (times[np.minimum(k, last)] <= t1 * (1 + 1e-14)))
-        if not hit.size:
-            return
-        r, k = rows[hit], k[hit]
-        h = (t1[hit] - t0[hit])[:, None]
-        s = np.clip((times[k] - t0[hit])[:, None] / h, 0.0, 1.0)
-        write(r, k, *hermite_step(s, h, y0[hit], d0[hit], y1[hit], d1[hit], slopes))
-        nxt[r] += 1
+    k = nxt[rows]
+    passed = np.searchsorted(times, t1 * (1 + 1e-14), side="right")  # times ≤ t1
+    hit = np.flatnonzero(passed > k)
+    if not hit.size:
+        return
+    count = passed[hit] - k[hit]        # the times each step passed, in one go
+    at = np.repeat(hit, count)
+    first = np.cumsum(count) - count
+    k = k[at] + np.arange(at.size) - np.repeat(first, count)
+    h = (t1[at] - t0[at])[:, None]
+    s = np.clip((times[k] - t0[at])[:, None] / h, 0.0, 1.0)
+    write(rows[at], k, *hermite_step(s, h, y0[at], d0[at], y1[at], d1[at], slopes))
+    nxt[rows[hit]] = passed[hit]
 
 
 def _shared(shape):
