@@ -228,7 +228,7 @@ def transient(circuit, t_stop: float, *, t_step: float | None = None, t_start: f
 #: ``method=auto`` integrates cells on their own steps from this many unknowns, when the
 #: sources switch on at least AUTO_MULTIRATE_SCHEDULES different schedules (cells that
 #: switch together are cheap for one global step)
-AUTO_MULTIRATE_UNKNOWNS = 1000
+AUTO_MULTIRATE_UNKNOWNS = 400
 AUTO_MULTIRATE_SCHEDULES = 32
 
 
