@@ -176,20 +176,20 @@ class _Group:
             mass[0], rate[0] = self._per_hub(self.state.M), self._per_hub(self.state.Q)
             next_sample = np.ones(self.batch.G, dtype=int)
 
-        ends = ([], [])  # every accepted step's system and end: the next sweep's guide
+        ends = ([], [])  # in a sweep, every accepted step's system and end: the next one's guide
 
         def on_step(rows, before, after):
             _record(self.times, self.next_out, rows, before, after, self._write, slopes=False)
-            ends[0].append(rows)
-            ends[1].append(after[0])
             if S is not None:
+                ends[0].append(rows)
+                ends[1].append(after[0])
                 _record(S, next_sample, rows, before, after, lambda r, k, m, q: (
                     np.add.at(mass, (k[:, None], cols[r]), m),
                     np.add.at(rate, (k[:, None], cols[r]), q)), mass=True)
         start = self.state.t.min()
         radau.advance(self.batch, self.state, t_end, opts.rtol, opts.atol, self.corners,
                       on_step, count, self._guide)
-        if S is not None and ends[0]:
+        if ends[0]:
             self._recorded = radau.StepGuide(self.batch.G, start, np.concatenate(ends[0]),
                                              np.concatenate(ends[1]))
         return count, ((mass, rate) if S is not None else None)
