@@ -52,6 +52,7 @@ T, T_INV, _GAMMA, _ALPHA_BETA = _transformation()   # γ = 1/γ₀ ≈ 3.6378, �
 NEWTON_ITERATIONS = 3
 NEWTON_TOL = 0.03     # estimated distance to the stage solution, in tolerance units
 SAFETY, GROW, SHRINK = 0.9, 6.0, 0.2
+NEWTON_CAP_GROWTH = 1.3  # growth per accepted step of the step bound after a Newton failure
 
 
 @dataclass
@@ -69,6 +70,7 @@ class BatchState:
     h_last: np.ndarray = None  # its length (s)
     err_last: np.ndarray = None  # its error norm (the predictive step control's memory)
     fresh: np.ndarray = None   # no usable last step (start, or after a jump)
+    h_newton: np.ndarray = None  # the step (s) Newton is trusted to converge on (inf: any)
 
     def copy(self) -> "BatchState":
         return BatchState(*(getattr(self, f.name).copy() for f in fields(self)))
@@ -190,7 +192,7 @@ def start(problem, t0: float, Y: np.ndarray, span: float, rtol: float, atol: flo
     speed = wrms(Yd, 1.0 / (rtol * np.abs(Y) + atol))  # tolerance units per second
     h = np.clip(10.0 / np.maximum(speed, 1e-300), 1e-9 * span, span)
     return BatchState(t, h, Y.copy(), Yd, Q, np.zeros_like(Q), np.zeros((3,) + Y.shape),
-                      h.copy(), np.full(G, 1e-2), np.ones(G, dtype=bool))
+                      h.copy(), np.full(G, 1e-2), np.ones(G, dtype=bool), np.full(G, np.inf))
 
 
 def advance(problem, st: BatchState, t_end: float, rtol: float, atol: float,
@@ -253,6 +255,12 @@ def _pass(problem, st, systems, active, t_end, tiny, rtol, atol, corners, on_ste
     # Newton failed: at least halve, more when the (unconverged) error says so — a
     # step across a kink of the flow laws then takes fewer attempts
     new_h = np.where(ok, new_h, np.minimum(0.5 * h, new_h))
+    # where Newton failed, the next steps stay below half that step, a bound that grows
+    # by NEWTON_CAP_GROWTH per accepted step: the error test alone would grow the step
+    # back onto the same failure (a valve settling onto its seat: fail, halve, grow 6×)
+    st.h_newton = np.where(active & ~ok, 0.5 * h,
+                           np.where(accepted, NEWTON_CAP_GROWTH * st.h_newton, st.h_newton))
+    new_h = np.minimum(new_h, st.h_newton)
     clipped = h < st.h
     st.h = np.where(active, np.where(accepted & clipped, np.maximum(st.h, new_h), new_h), st.h)
     count.rejected += int(np.count_nonzero(active & ~accepted))
