@@ -106,6 +106,7 @@ class CircuitDAE:
         self._csc_indices = (keys % self.n).astype(np.int32)
         self._csc_indptr = np.searchsorted(keys // self.n, np.arange(self.n + 1)).astype(np.int32)
         self.nnz = len(keys)
+        self._diagonal_at = np.searchsorted(keys, diag * self.n + diag)  # CSC data positions
         pos = np.searchsorted(keys, cols * self.n + rows)
         start = 0
         for block, count in zip(blocks, owners):
@@ -235,16 +236,21 @@ class CircuitDAE:
 
     def derivative(self, t, y) -> np.ndarray:
         """ẏ consistent with y: M_dd·ẏ_d = −F_d(ẏ=0), ẏ_a = 0 (kPa/s)."""
-        f0, _ = self.evaluate(t, y, np.zeros(self.n))
+        zeros = np.zeros(self.n)
+        f0, stiff = self.evaluate(t, y, zeros, cj=0.0)
+        stiff = stiff.copy()
+        mass = self.evaluate(t, y, zeros, cj=1.0)[1] - stiff
         d = np.flatnonzero(self.differential)
-        mass = self.mass_matrix(t, y)[d][:, d]
         ydot = np.zeros(self.n)
-        if mass.nnz == d.size:  # one storage term per node: divide
-            ydot[d] = -f0[d] / mass.diagonal()
+        diagonal = mass[self._diagonal_at]
+        mass[self._diagonal_at] = 0.0
+        if not mass.any():  # one storage term per node: divide
+            ydot[d] = -f0[d] / diagonal[d]
         else:
             from scipy.sparse.linalg import spsolve
 
-            ydot[d] = -spsolve(mass.tocsc(), f0[d])
+            mass[self._diagonal_at] = diagonal
+            ydot[d] = -spsolve(self.csc(mass)[d][:, d].tocsc(), f0[d])
         return ydot
 
     # -- breakpoints and reporting --------------------------------------------------------
