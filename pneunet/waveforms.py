@@ -1,4 +1,5 @@
-"""Time functions for sources: constant, step, pulse, piecewise-linear, sine, any function.
+"""Time functions for sources: constant, step, pulse, piecewise-linear, sine, any function,
+and samples with slopes (cubic Hermite between them).
 
 Each waveform gives ``value(t)`` (vectorised) in the unit of the source it drives
 (kPa for pressure sources, mg/s for flow sources), its ``breakpoints`` (times at
@@ -299,6 +300,72 @@ class Function(Waveform):
     def netlist(self) -> str:
         raise ParameterError(f"function source {self!r} cannot be written as netlist text",
                              hint="sample it into a PWL, or a CSV read by PWL(FILE=...)")
+
+
+def _hermite_coefficients(times, values, slopes):
+    """(y_k, d_k, c2, c3) of the cubics y = y_k + d_k·τ + c2·τ² + c3·τ³ (τ = t − t_k)
+    through the values and slopes at consecutive times (rows); a zero-length interval
+    (a repeated time) gets finite coefficients that are never evaluated."""
+    h = np.diff(times).reshape((-1,) + (1,) * (values.ndim - 1))
+    h = np.where(h > 0, h, 1.0)
+    dy = (values[1:] - values[:-1]) / h
+    return (values[:-1], slopes[:-1], (3 * dy - 2 * slopes[:-1] - slopes[1:]) / h,
+            (slopes[:-1] + slopes[1:] - 2 * dy) / (h * h))
+
+
+class SampleTable:
+    """c signals known with their slopes at shared, increasing sample times (m,):
+    between two samples the cubic Hermite through both values and both slopes (C¹).
+    A time may repeat once (a corner): the earlier row ends the interval before it,
+    the later one starts the interval after it."""
+
+    def __init__(self, times, values, slopes):
+        self.times = np.asarray(times, dtype=float)
+        values, slopes = (np.asarray(a, dtype=float).reshape(self.times.size, -1)
+                          for a in (values, slopes))
+        self._coef = _hermite_coefficients(self.times, values, slopes)
+
+    def _interval(self, t):
+        k = np.clip(np.searchsorted(self.times, t, side="right") - 1, 0, self.times.size - 2)
+        return k, t - self.times[k]
+
+    def curve(self, t):
+        """Values and slopes (t.size, c) of every signal at the times ``t`` (s)."""
+        k, tau = self._interval(np.asarray(t, dtype=float))
+        tau = tau[:, None]
+        y, d, c2, c3 = (a[k] for a in self._coef)
+        return y + tau * (d + tau * (c2 + tau * c3)), d + tau * (2 * c2 + 3 * tau * c3)
+
+    def at(self, t, columns):
+        """Value of signal ``columns[i]`` at time ``t[i]`` (s), arrays of one shape."""
+        k, tau = self._interval(np.asarray(t, dtype=float))
+        y, d, c2, c3 = (a[k, columns] for a in self._coef)
+        return y + tau * (d + tau * (c2 + tau * c3))
+
+
+class Sampled(Waveform):
+    """Signal ``column`` of a :class:`SampleTable`: a waveform computed elsewhere (the
+    hub of a multirate transient), with the ``corners`` (s) where its slope jumps.
+    Sources that share a table are evaluated together."""
+
+    def __init__(self, table: SampleTable, column: int, corners=()):
+        self.table, self.column = table, int(column)
+        self._corners = np.unique(np.asarray(corners, dtype=float))
+
+    def __repr__(self):
+        return f"Sampled(column {self.column} of {self.table.times.size} samples)"
+
+    def value(self, t):
+        t = np.asarray(t, dtype=float)
+        out = self.table.at(t.ravel(), np.full(t.size, self.column)).reshape(t.shape)
+        return out if out.ndim else float(out)
+
+    def breakpoints(self, t_start, t_stop):
+        return _inside(self._corners, t_start, t_stop)
+
+    def netlist(self) -> str:
+        raise ParameterError(f"{self!r} cannot be written as netlist text",
+                             hint="sample it into a PWL")
 
 
 def _inside(points, t_start, t_stop):

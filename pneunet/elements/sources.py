@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..waveforms import Constant, Pulse, PulseTable
+from ..waveforms import Constant, Pulse, PulseTable, Sampled
 from . import register
 from .base import ElementFamily, Param
 
@@ -18,14 +18,14 @@ class _WaveformBank:
     """Values of many waveforms at one time: PULSE and constants vectorised.
 
     PULSE uses the same :class:`~pneunet.waveforms.PulseTable` as
-    :meth:`pneunet.waveforms.Pulse.value`, so results are identical; other waveforms
-    are evaluated one by one.
+    :meth:`pneunet.waveforms.Pulse.value`, so results are identical; sampled
+    waveforms of one table are evaluated together; others one by one.
     """
 
     def __init__(self, waveforms):
         self.n = len(waveforms)
-        kinds = np.array([0 if type(w) is Constant else 1 if type(w) is Pulse else 2
-                          for w in waveforms])
+        kinds = np.array([0 if type(w) is Constant else 1 if type(w) is Pulse else
+                          3 if type(w) is Sampled else 2 for w in waveforms])
         self._const = np.flatnonzero(kinds == 0)
         self._level = np.array([float(waveforms[i].level) for i in self._const])
         self._pulse = np.flatnonzero(kinds == 1)
@@ -35,6 +35,13 @@ class _WaveformBank:
         self._low, self._swing = p["low"], p["high"] - p["low"]
         self._table = PulseTable(*(p[k] for k in cols[2:]))
         self._other = [(i, waveforms[i]) for i in np.flatnonzero(kinds == 2)]
+        tables = {}  # id(table) → (table, [instance], [column])
+        for i in np.flatnonzero(kinds == 3):
+            entry = tables.setdefault(id(waveforms[i].table), (waveforms[i].table, [], []))
+            entry[1].append(i)
+            entry[2].append(waveforms[i].column)
+        self._sampled = [(table, np.array(at), np.array(cols)) for table, at, cols in
+                         tables.values()]
 
     def value(self, t):
         """Values (..., n) at time t (s): a float, or an array of times."""
@@ -43,6 +50,10 @@ class _WaveformBank:
         out[..., self._const] = self._level
         if self._pulse.size:
             out[..., self._pulse] = self._low + self._swing * self._table.fraction(t[..., None])
+        for table, at, cols in self._sampled:
+            times = np.broadcast_to(t[..., None], t.shape + cols.shape)
+            out[..., at] = table.at(times.ravel(), np.broadcast_to(cols, times.shape).ravel()
+                                    ).reshape(times.shape)
         for i, wave in self._other:
             out[..., i] = wave.value(t)
         return out
@@ -54,6 +65,8 @@ class _WaveformBank:
         out[self._const] = self._level
         if self._pulse.size:
             out[self._pulse] = self._low + self._swing * self._table.fraction(t[self._pulse])
+        for table, at, cols in self._sampled:
+            out[at] = table.at(t[at], cols)
         for i, wave in self._other:
             out[i] = wave.value(t[i])
         return out

@@ -43,6 +43,7 @@ from .solution import Solution, build_solution
 from .solvers import radau
 from .solvers.interpolate import hermite_step
 from ..errors import SolverError
+from ..waveforms import SampleTable
 from ..workers import Servant, can_fork, process_pool
 
 SAMPLES = 8                # hub sample intervals per window: at least,
@@ -130,7 +131,7 @@ class _Group:
                                   for c in cells], dtype=int).reshape(len(cells), -1)
         self.batch.boundary_cols = self.hub_cols
         self.n_hub = len(part.hub_nodes)
-        self.corners = radau.Corners(*_cell_corners(corners, cells))
+        self.corners = radau.Corners(*cell_corners(corners, cells))
         self.times, self.out = times, out
         self.next_out = np.ones(len(cells), dtype=int)
         self.t_start, self.span = t_start, t_stop - t_start
@@ -146,7 +147,8 @@ class _Group:
     def set_hub(self, S, value, slope):
         """The hub pressures the cells see: the cubic Hermite through ``value`` and
         ``slope`` (S.size, n_hub) at the times S."""
-        self.batch.boundary = _values(_cubic(S, value, slope))
+        curve = SampleTable(S, value, slope).curve
+        self.batch.boundary = lambda t: curve(t)[0]
 
     def draw_now(self):
         """The cells' draw from each hub node now (n_hub,), mg/s."""
@@ -266,7 +268,7 @@ class _Hub:
         cell = Cell(part.hub_elements, list(part.hub_nodes), [], list(part.hub_sources))
         self.batch = CellBatch(circuit, [cell], hub_nodes=part.hub_nodes, title="hub")
         self.cols = np.array([dae.node_index(n) for n in cell.nodes])
-        own, jumps = _cell_corners(corners, [cell])
+        own, jumps = cell_corners(corners, [cell])
         self.own_corners, self.own_jumps = own[0], jumps[0]
         self.times, self.out = times, out
         self.next_out = np.ones(1, dtype=int)
@@ -304,7 +306,8 @@ class _Hub:
         whose draw grows by ``slope`` (n_hub,) mg/(s·kPa) per kPa of hub pressure,
         landing on the times ``land``; return the hub's pressures and their rates at S
         (M + 1, n_hub) each."""
-        self._draw, self._seen, self.slope = _cubic(S, *drawn), _cubic(S, *seen), slope
+        self._draw, self._seen = SampleTable(S, *drawn).curve, SampleTable(S, *seen).curve
+        self.slope = slope
         self._inputs.clear()
         values, rates = np.empty((S.size, self.batch.k)), np.empty((S.size, self.batch.k))
         values[0], rates[0] = self.state.Y[0], self.state.Yd[0]
@@ -451,29 +454,6 @@ def _change(new, seen, opts) -> float:
     return float(np.max(np.abs(new[0] - seen[0]) / (opts.rtol * np.abs(new[0]) + opts.atol)))
 
 
-def _cubic(S, value, slope):
-    """The piecewise cubic Hermite through ``value`` and ``slope`` (M + 1, c) at the
-    sample times S: a function of times t (m,) giving (values, slopes) (m, c)."""
-    h = np.diff(S)[:, None]
-    dy = (value[1:] - value[:-1]) / h
-    c2 = (3 * dy - 2 * slope[:-1] - slope[1:]) / h      # y = y_k + d_k τ + c2 τ² + c3 τ³
-    c3 = (slope[:-1] + slope[1:] - 2 * dy) / (h * h)
-    last = S.size - 2
-
-    def at(t):
-        k = np.searchsorted(S, t, side="right") - 1
-        k = np.minimum(np.maximum(k, 0), last)
-        tau = (t - S[k])[:, None]
-        b, c, d = slope[k], c2[k], c3[k]
-        return value[k] + tau * (b + tau * (c + tau * d)), b + tau * (2 * c + 3 * tau * d)
-    return at
-
-
-def _values(curve):
-    """The values alone of a :func:`_cubic` curve: a cell batch's boundary function."""
-    return lambda t: curve(t)[0]
-
-
 def _record(times, nxt, rows, before, after, write, mass=False, slopes=True):
     """For each step that passed one of ``times`` (shared, increasing), write the
     cubic Hermite interpolant's value and slope (None without ``slopes``) there; ``nxt``
@@ -505,7 +485,7 @@ def _shared(shape):
     return np.frombuffer(mmap.mmap(-1, max(8 * size, 8)), dtype=float, count=size).reshape(shape)
 
 
-def _cell_corners(corners, cells):
+def cell_corners(corners, cells):
     """Per cell: the corners and jumps (s) of its elements' inputs, from ``corners``
     (:meth:`CircuitDAE.instance_corners`)."""
     times, jumps = [], []
