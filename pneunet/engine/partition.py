@@ -47,6 +47,9 @@ class Partition:
     hub_sources: list[str]
     cells: list[Cell]
     groups: list[list[int]] = field(default_factory=list)  # cell indices with one signature
+    #: no cell element passes flow at a hub node (e.g. valves whose control ports alone
+    #: sit on the hub): the hub does not depend on the cells
+    read_only_hub: bool = False
 
     @property
     def largest_cell(self) -> int:
@@ -106,18 +109,23 @@ def partition(circuit, hub_degree: int = HUB_DEGREE) -> Partition:
                 cell.sources.append(pinned_by[n])
     out = Partition(sorted(hub, key=list(degree).index), hub_elements,
                     sorted(hub_sources), list(cells.values()))
+    out.read_only_hub = bool(hub) and not any(
+        spec.nodes[port] in hub
+        for cell in out.cells for spec in (circuit.elements[name] for name in cell.elements)
+        for port in elements.family(spec.kind).passing_flow(len(spec.nodes)))
     groups: dict[tuple, list[int]] = {}
     for k, cell in enumerate(out.cells):
-        cell.signature = _signature(circuit, cell)
+        cell.signature = _signature(circuit, cell, hub_as_sources=out.read_only_hub)
         groups.setdefault(cell.signature, []).append(k)
     out.groups = list(groups.values())
     return out
 
 
-def _signature(circuit, cell: Cell) -> tuple:
+def _signature(circuit, cell: Cell, hub_as_sources=False) -> tuple:
     """The cell's structure: element kinds with their nodes numbered by first use
     (hub nodes apart: cells of one structure on different hub nodes are one group;
-    references as 'ref', pinned nodes by first use too)."""
+    references as 'ref', pinned nodes by first use too).  ``hub_as_sources``: hub nodes
+    count as pinned nodes (a read-only hub pins them for the cells)."""
     local: dict[str, str] = {}
     hubs: dict[str, str] = {}
     parts = []
@@ -125,7 +133,7 @@ def _signature(circuit, cell: Cell) -> tuple:
         spec = circuit.elements[name]
         nodes = []
         for n in spec.nodes:
-            if n in cell.hub_nodes:
+            if n in cell.hub_nodes and not hub_as_sources:
                 nodes.append(hubs.setdefault(n, f"hub{len(hubs)}"))
             elif circuit.is_reference(n):
                 nodes.append("ref")
@@ -160,7 +168,7 @@ def unsupported(part: Partition, algebraic: set[str]) -> str:
     hub_algebraic = [n for n in part.hub_nodes if n in algebraic]
     if hub_algebraic:
         return f"hub node {hub_algebraic[0]} has no volume"
-    if part.hub_nodes:
+    if part.hub_nodes and not part.read_only_hub:
         for cell in part.cells:
             without = [n for n in cell.nodes if n in algebraic]
             if without:
