@@ -116,7 +116,9 @@ def transient(circuit, t_stop: float, *, t_step: float | None = None, t_start: f
 
 #: ``method=auto`` integrates cells on their own steps from this many unknowns, when the
 #: sources switch on at least AUTO_MULTIRATE_SCHEDULES different schedules (cells that
-#: switch together are cheap for one global step)
+#: switch together are cheap for one global step); cells that only read their hub (it
+#: pins them: no relaxation) from AUTO_MIN_CELLS cells driven in at least
+#: AUTO_MULTIRATE_SCHEDULES different ways
 AUTO_MULTIRATE_UNKNOWNS = 400
 AUTO_MULTIRATE_SCHEDULES = 32
 
@@ -124,17 +126,23 @@ AUTO_MULTIRATE_SCHEDULES = 32
 def _partition_for(circuit, dae, backend, span):
     """The circuit's hub and cells when the multirate method integrates it over ``span``
     (t_start, t_stop), else None."""
-    method = circuit.options.method
-    if method == "single" or method == "auto" and (
-            backend is not None or dae.n < AUTO_MULTIRATE_UNKNOWNS
-            or _schedules(dae, *span) < AUTO_MULTIRATE_SCHEDULES):
-        return None
-    from .partition import partition, unsupported, worth_partitioning
+    from .partition import AUTO_MIN_CELLS, partition, unsupported, worth_partitioning
 
+    method = circuit.options.method
+    if method == "single" or method == "auto" and (backend is not None
+                                                   or dae.n < AUTO_MIN_CELLS):
+        return None
+    scheduled = dae.n >= AUTO_MULTIRATE_UNKNOWNS and \
+        _schedules(dae, *span) >= AUTO_MULTIRATE_SCHEDULES
     part = partition(circuit)
     algebraic = {dae.node_names[i] for i in dae.algebraic_idx}
     if method == "auto":
-        return None if worth_partitioning(part, algebraic) else part
+        if worth_partitioning(part, algebraic):
+            return None
+        if scheduled or part.read_only_hub and \
+                _drives(dae, part, span) >= AUTO_MULTIRATE_SCHEDULES:
+            return part
+        return None
     why = unsupported(part, algebraic)
     if why:
         raise ParameterError(f"method=multirate cannot split this circuit: {why}",
@@ -154,7 +162,8 @@ def transient_method(circuit, span=(0.0, 1.0)) -> str:
         return f"single-rate IDA ({dae.n} unknowns, method={circuit.options.method})"
     hub = ", ".join(part.hub_nodes[:3]) + (" …" if len(part.hub_nodes) > 3 else "")
     return (f"multirate: {len(part.cells)} cells in {len(part.groups)} group(s)"
-            + (f", hub nodes {hub}" if part.hub_nodes else ", no hub (independent cells)"))
+            + (f", hub nodes {hub}" if part.hub_nodes else ", no hub (independent cells)")
+            + (" (read only by the cells: integrated first)" if part.read_only_hub else ""))
 
 
 def _schedules(dae, t_start, t_stop) -> float:
@@ -163,6 +172,17 @@ def _schedules(dae, t_start, t_stop) -> float:
     own = [len(c[0]) for c in dae.instance_corners(t_start, t_stop).values()]
     mean = np.mean(own) if own else 0.0
     return dae.breakpoints(t_start, t_stop).size / mean if mean > 0 else 0.0
+
+
+def _drives(dae, part, span) -> int:
+    """How many different ways the cells are driven: distinct sets of the hub nodes and
+    the source schedules (corners in ``span``) each cell reads."""
+    corners = dae.instance_corners(*span)
+    drives = {(tuple(sorted(cell.hub_nodes)),
+               tuple(sorted(tuple(np.round(corners[s][0], 12)) if s in corners else ()
+                            for s in cell.sources)))
+              for cell in part.cells}
+    return len(drives)
 
 
 def _single_rate(circuit, t_stop, t_step, t_start):
