@@ -324,9 +324,12 @@ class SampleTable:
         values, slopes = (np.asarray(a, dtype=float).reshape(self.times.size, -1)
                           for a in (values, slopes))
         self._coef = _hermite_coefficients(self.times, values, slopes)
+        self._packed = np.stack(self._coef, axis=-1)  # (m − 1, c, 4): one gather per call
+        self._last = self.times.size - 2
 
     def _interval(self, t):
-        k = np.clip(np.searchsorted(self.times, t, side="right") - 1, 0, self.times.size - 2)
+        k = np.minimum(np.maximum(np.searchsorted(self.times, t, side="right") - 1, 0),
+                       self._last)  # (np.clip costs more than the search)
         return k, t - self.times[k]
 
     def curve(self, t):
@@ -339,8 +342,8 @@ class SampleTable:
     def at(self, t, columns):
         """Value of signal ``columns[i]`` at time ``t[i]`` (s), arrays of one shape."""
         k, tau = self._interval(np.asarray(t, dtype=float))
-        y, d, c2, c3 = (a[k, columns] for a in self._coef)
-        return y + tau * (d + tau * (c2 + tau * c3))
+        c = self._packed[k, columns]
+        return c[..., 0] + tau * (c[..., 1] + tau * (c[..., 2] + tau * c[..., 3]))
 
 
 class Sampled(Waveform):

@@ -313,11 +313,16 @@ def _newton_matrices(jac, mass, h, active):
     """Inverses of the real and complex iteration matrices γ/h·M + J and
     (α − iβ)/h·M + J per system, (G, k, k) each (identity for inactive systems)."""
     k = jac.shape[1]
-    scale = 1.0 / h[:, None, None]
-    real = _GAMMA * scale * mass + jac
-    pair = _ALPHA_BETA * scale * mass + jac
-    real[~active], pair[~active] = np.eye(k), np.eye(k)
-    return _inverse(real), _inverse(pair)
+    if active.all():
+        scale = 1.0 / h[:, None, None]
+        return _inverse(_GAMMA * scale * mass + jac), _inverse(_ALPHA_BETA * scale * mass + jac)
+    rows = np.flatnonzero(active)
+    scale = 1.0 / h[rows, None, None]
+    real = np.broadcast_to(np.eye(k), jac.shape).copy()
+    pair = real.astype(complex)
+    real[rows] = _inverse(_GAMMA * scale * mass[rows] + jac[rows])
+    pair[rows] = _inverse(_ALPHA_BETA * scale * mass[rows] + jac[rows])
+    return real, pair
 
 
 def _inverse(m):
@@ -416,6 +421,8 @@ def _extrapolate(Z, ratio):
     d0, d1, d2, d3 = diff
     weight = [(_LAGRANGE[1] * d0) * (d2 * d3), (_LAGRANGE[2] * d0) * (d1 * d3),
               (_LAGRANGE[3] * d0) * (d1 * d2)]
+    if Z.shape[2] > 2:
+        return np.einsum("jig,jgk->igk", np.array(weight), Z) - Z[2][None]
     out = np.empty_like(Z)
     for c in range(Z.shape[2]):  # column by column: numpy is slow on a last axis of 2
         out[:, :, c] = (weight[0] * Z[0][:, c] + weight[1] * Z[1][:, c]
