@@ -49,7 +49,7 @@ def _transformation():
 
 
 T, T_INV, _GAMMA, _ALPHA_BETA = _transformation()   # γ = 1/γ₀ ≈ 3.6378, α − iβ
-NEWTON_ITERATIONS = 3
+NEWTON_ITERATIONS = 2
 NEWTON_TOL = 0.03     # estimated distance to the stage solution, in tolerance units
 SAFETY, GROW, SHRINK = 0.9, 6.0, 0.2
 NEWTON_CAP_GROWTH = 1.3  # growth per accepted step of the step bound after a Newton failure
