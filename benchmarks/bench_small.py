@@ -18,8 +18,10 @@ Printed per circuit (medians of ``--repeats`` runs):
 * accuracy against pneunet at rtol = atol = 1e-9: the oscillator's period, the
   others' largest relative pressure deviation on the output grid;
 * for the oscillator, steps and residual calls per simulated second.
-``--demux6`` (default on) adds the 6-bit demultiplexer (390 unknowns, 64 s):
-in-process time and the whole process's peak memory (targets 5 s, 300 MB).
+The 6-bit demultiplexer (390 unknowns, 64 s; ``--no-demux6`` leaves it out) runs with
+``method=auto`` (hub first) and single-rate IDA, alternating: in-process times, the
+whole process's peak memory (targets 5 s, 300 MB) and both runs' deviation from
+single-rate IDA at rtol 1e-8 (``--no-reference`` skips that 22 s run).
 ngspice is skipped with a note when it is not installed
 (``apt-get install -y ngspice`` on Debian/Ubuntu).
 """
@@ -155,6 +157,8 @@ def main(argv=None):
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--no-demux6", action="store_true")
     ap.add_argument("--no-ngspice", action="store_true")
+    ap.add_argument("--no-reference", action="store_true",
+                    help="demux6 without its rtol 1e-8 reference (22 s)")
     args = ap.parse_args(argv)
     have_spice = shutil.which("ngspice") is not None and not args.no_ngspice
     if not have_spice and not args.no_ngspice:
@@ -199,17 +203,52 @@ def main(argv=None):
                   f"{what} {err_pn:.1e} | – |")
 
     if not args.no_demux6:
-        demux6 = os.path.join(REPO, "netlists", "demux6.pn")
-        with tempfile.TemporaryDirectory() as tmp:
-            wall, peak = peak_memory_mb([sys.executable, "-m", "pneunet", "run", demux6, "-q",
-                                         "-o", tmp])
-        pn = pneunet_in_process("demux6.pn", 0.01, 64.0, ["act[0]"], 1)
-        s = pn["stats"]
-        print(f"\ndemux6 (64 s, {s['unknowns']} unknowns): transient {pn['wall']:.2f} s "
-              f"(target ≤ 5 s); whole process {wall:.2f} s, peak memory {peak:.0f} MB "
-              f"(target ≤ 300 MB); steps {s['steps']}, residuals {s['residual_calls']}, "
-              f"Jacobians {s['jacobian_calls']}")
+        demux6(args)
 
+
+DEMUX6_NODES = [f"act[{k}]" for k in range(64)]
+
+
+def demux6(args):
+    """The 6-bit demultiplexer: ``method=auto`` (its cells read their inverters' lines
+    only: hub first) and single-rate IDA, alternating, medians; the whole process's
+    peak memory; both against single-rate IDA at rtol 1e-8 (unless --no-reference)."""
+    demux6 = os.path.join(REPO, "netlists", "demux6.pn")
+    with tempfile.TemporaryDirectory() as tmp:
+        wall, peak = peak_memory_mb([sys.executable, "-m", "pneunet", "run", demux6, "-q",
+                                     "-o", tmp])
+    from pneunet.engine.simulate import transient
+
+    runs = {"auto": [], "single": []}
+    solutions = {}
+    for _ in range(args.repeats):
+        for method, times in runs.items():
+            circuit = circuit_of("demux6.pn", method=method)
+            t0 = time.perf_counter()
+            solutions[method] = transient(circuit, 64.0, t_step=0.01)
+            times.append(time.perf_counter() - t0)
+    auto, single = (float(np.median(runs[m])) for m in ("auto", "single"))
+    s, r = solutions["auto"].stats, solutions["single"].stats
+    print(f"\ndemux6 (64 s, {s['unknowns']} unknowns), medians of {args.repeats} alternating runs:"
+          f"\n  method=auto ({s['method']}): {auto:.2f} s (target ≤ 5 s), {single / auto:.2f}× "
+          f"faster than single-rate; hub {s.get('hub_steps', 0)} IDA steps, cells "
+          f"{s['steps'] - s.get('hub_steps', 0)} steps, {s.get('rejected', 0)} rejected, "
+          f"{s.get('passes', 0)} passes"
+          f"\n  method=single: {single:.2f} s; steps {r['steps']}, residuals "
+          f"{r['residual_calls']}, Jacobians {r['jacobian_calls']}"
+          f"\n  whole process (auto) {wall:.2f} s, peak memory {peak:.0f} MB (target ≤ 300 MB)")
+    p = {m: np.column_stack([sol.pressure(x) for x in DEMUX6_NODES])
+         for m, sol in solutions.items()}
+    t = solutions["auto"].t
+    print(f"  actuators, auto against single: largest deviation "
+          f"{deviation(t, p['auto'], solutions['single'].t, p['single']):.1e} (relative)")
+    if not args.no_reference:
+        ref = transient(circuit_of("demux6.pn", method="single", rtol=1e-8, atol=1e-8), 64.0,
+                        t_step=0.01)
+        p_ref = np.column_stack([ref.pressure(x) for x in DEMUX6_NODES])
+        print("  against single-rate IDA at rtol 1e-8: auto "
+              f"{deviation(t, p['auto'], ref.t, p_ref):.1e}, single "
+              f"{deviation(solutions['single'].t, p['single'], ref.t, p_ref):.1e} (relative)")
 
 if __name__ == "__main__":
     main()

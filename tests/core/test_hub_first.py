@@ -118,3 +118,16 @@ def test_sampled_sources_of_one_table_evaluate_together_as_one_by_one():
     grid = np.array([[0.1, 0.35], [0.6, 0.95]])
     assert np.allclose(bank.value(grid), np.stack([w.value(grid) for w in waves], axis=-1))
     assert list(waves[0].breakpoints(0.0, 1.0)) == [0.5]
+
+
+def test_auto_runs_hub_first_when_the_cells_are_driven_in_many_ways():
+    from pneunet.engine.simulate import transient_method
+
+    staggered = address_network("auto", cells=64)       # 64 different control schedules
+    assert "read only by the cells" in transient_method(staggered, (0.0, 3.0))
+    same = address_network("auto", cells=64)
+    for k in range(64):  # every cell on the first cell's control pulse
+        same.elements[f"PC[{k}]"].params["value"] = same.elements["PC[0]"].params["value"]
+    assert transient_method(same, (0.0, 3.0)).startswith("single-rate IDA")
+    assert transient_method(address_network("auto", cells=20), (0.0, 3.0)).startswith(
+        "single-rate IDA")  # fewer than 64 cells
