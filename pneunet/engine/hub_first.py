@@ -55,8 +55,8 @@ def transient(circuit, part: Partition, t_stop: float, t_step: float | None, t_s
         sol = multirate(cells, partition(cells), t_stop, t_step, t_start, y0[index],
                         algebraic - set(hub_nodes), single_rate)
     except SolverError as err:
-        partial = err.partial and _whole(dae, err.partial, index, hub_index, table,
-                                         dict(err.partial.stats))
+        partial = None if err.partial is None else _whole(dae, err.partial, index, hub_index,
+                                                          table, dict(err.partial.stats))
         raise SolverError(err.message, time=err.time, where=err.where, hint=err.hint,
                           partial=partial) from None
     stats = dict(sol.stats, method="multirate (hub first)", hub_nodes=len(hub_nodes),

@@ -101,7 +101,7 @@ def transient(circuit, part: Partition, t_stop: float, t_step: float | None, t_s
             _advance_all(groups, t_stop, None, opts, count)
     except SolverError as err:
         if not part.hub_nodes:  # each cell recorded its outputs up to where it got
-            done[0] = min([t_start] + [g.earliest() for g in groups])
+            done[0] = min((g.earliest() for g in groups), default=t_start)
         rows = int(np.searchsorted(times, done[0], side="right"))
         partial = build_solution(dae, times[:rows], np.array(out[:rows]),
                                  dict(stats, failed=True), ())

@@ -131,3 +131,26 @@ def test_auto_runs_hub_first_when_the_cells_are_driven_in_many_ways():
     assert transient_method(same, (0.0, 3.0)).startswith("single-rate IDA")
     assert transient_method(address_network("auto", cells=20), (0.0, 3.0)).startswith(
         "single-rate IDA")  # fewer than 64 cells
+
+
+def test_a_failing_cell_keeps_every_row_all_cells_reached(monkeypatch):
+    """A solver failure mid-run returns the rows up to where every cell got, hub
+    columns included, equal to those of a run that does not fail."""
+    from pneunet.engine.solvers import radau
+    from pneunet.errors import SolverError
+
+    full = address_network().tran(3.0, t_step=0.01)
+    check, passes = radau._check_step, [0]
+
+    def collapse_late(problem, st, active, h, systems):
+        passes[0] += 1
+        if passes[0] > 400:
+            raise SolverError("forced collapse", time=float(st.t.min()))
+        return check(problem, st, active, h, systems)
+    monkeypatch.setattr(radau, "_check_step", collapse_late)
+    with pytest.raises(SolverError) as caught:
+        address_network().tran(3.0, t_step=0.01)
+    partial = caught.value.partial
+    assert 0.5 < partial.t[-1] < 3.0 and partial.t.size > 50
+    for node in ["h", "act[0]", "act[19]"]:
+        np.testing.assert_array_equal(partial.pressure(node), full.pressure(node)[:partial.t.size])
