@@ -224,11 +224,16 @@ class CircuitDAE:
         """∂F/∂y + cj·∂F/∂ẏ as a scipy CSC matrix."""
         return self.csc(self.evaluate(t, y, ydot, cj)[1])
 
+    def _mass_data(self, t, y):
+        """F(t, y, ẏ = 0) and the CSC data of ∂F/∂ẏ at (t, y) (mg/s, mg/kPa)."""
+        zeros = np.zeros(self.n)
+        f0, stiff = self.evaluate(t, y, zeros, cj=0.0)
+        stiff = stiff.copy()
+        return f0, self.evaluate(t, y, zeros, cj=1.0)[1] - stiff
+
     def mass_matrix(self, t, y):
         """∂F/∂ẏ at (t, y) as a CSC matrix, mg/kPa."""
-        zeros = np.zeros(self.n)
-        stiff = self.evaluate(t, y, zeros, cj=0.0)[1].copy()
-        return self.csc(self.evaluate(t, y, zeros, cj=1.0)[1] - stiff)
+        return self.csc(self._mass_data(t, y)[1])
 
     def capacitance(self, t, y) -> np.ndarray:
         """The diagonal of ∂F/∂ẏ: the capacitance (mg/kPa) at each unknown node."""
@@ -236,10 +241,7 @@ class CircuitDAE:
 
     def derivative(self, t, y) -> np.ndarray:
         """ẏ consistent with y: M_dd·ẏ_d = −F_d(ẏ=0), ẏ_a = 0 (kPa/s)."""
-        zeros = np.zeros(self.n)
-        f0, stiff = self.evaluate(t, y, zeros, cj=0.0)
-        stiff = stiff.copy()
-        mass = self.evaluate(t, y, zeros, cj=1.0)[1] - stiff
+        f0, mass = self._mass_data(t, y)
         d = np.flatnonzero(self.differential)
         ydot = np.zeros(self.n)
         diagonal = mass[self._diagonal_at]

@@ -203,6 +203,16 @@ class Circuit:
         self.initial[node] = self._number(pressure, "pressure", f"initial pressure of {node}",
                                           f"node {node}")
 
+    def subcircuit(self, element_names, nodes, title: str | None = None) -> "Circuit":
+        """A circuit of its own made of the elements ``element_names`` (their specs
+        shared, same options), with the ``.ic`` values of ``nodes``."""
+        sub = Circuit(self.title if title is None else title, self.options)
+        for name in element_names:
+            sub.elements[name] = self.elements[name]
+        nodes = set(nodes)
+        sub.initial.update({n: v for n, v in self.initial.items() if n in nodes})
+        return sub
+
     # -- inspection ---------------------------------------------------------------
     @property
     def nodes(self) -> list[str]:

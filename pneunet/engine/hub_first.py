@@ -45,7 +45,9 @@ def transient(circuit, part: Partition, t_stop: float, t_step: float | None, t_s
     wall = _time.perf_counter()
     dae = CircuitDAE(circuit)
     table, hub_nodes, corners, hub_steps = _integrate_hub(
-        _hub_circuit(circuit, part), {n: y0[dae.node_index(n)] for n in part.hub_nodes},
+        circuit.subcircuit(part.hub_sources + part.hub_elements, part.hub_nodes,
+                           f"{circuit.title} (hub)"),
+        {n: y0[dae.node_index(n)] for n in part.hub_nodes},
         t_start, t_stop)
     cells = _cells_circuit(circuit, part, table, hub_nodes, corners)
     cells_dae = CircuitDAE(cells, validate=False)
@@ -66,15 +68,6 @@ def transient(circuit, part: Partition, t_stop: float, t_step: float | None, t_s
     return _whole(dae, sol, index, hub_index, table, stats)
 
 
-def _hub_circuit(circuit, part) -> Circuit:
-    """The hub's elements and the sources they touch, as a circuit of their own."""
-    hub = Circuit(f"{circuit.title} (hub)", circuit.options)
-    for name in part.hub_sources + part.hub_elements:
-        hub.elements[name] = circuit.elements[name]
-    hub.initial.update({n: v for n, v in circuit.initial.items() if n in part.hub_nodes})
-    return hub
-
-
 def _integrate_hub(hub, y0, t_start, t_stop):
     """Integrate the hub (single-rate IDA) from its pressures ``y0`` {node: kPa}; return
     the table of its nodes' pressures and rates (kPa, kPa/s) at every step, the nodes
@@ -92,16 +85,13 @@ def _integrate_hub(hub, y0, t_start, t_stop):
 def _cells_circuit(circuit, part, table, hub_nodes, corners) -> Circuit:
     """The cells' elements and sources, each of the ``hub_nodes`` pinned by a source
     that follows its column of ``table``, with the hub's ``corners`` (s)."""
-    cells = Circuit(circuit.title, circuit.options)
-    for cell in part.cells:
-        for name in cell.sources + cell.elements:
-            cells.elements[name] = circuit.elements[name]
+    cells = circuit.subcircuit(
+        list(dict.fromkeys(n for cell in part.cells for n in cell.sources + cell.elements)),
+        [n for cell in part.cells for n in cell.nodes])
     for column, node in enumerate(hub_nodes):
         name = f"{node}@hub"
         cells.elements[name] = ElementSpec("pressure_source", name, (node,),
                                            {"value": Sampled(table, column, corners)})
-    cell_nodes = {n for cell in part.cells for n in cell.nodes}
-    cells.initial.update({n: v for n, v in circuit.initial.items() if n in cell_nodes})
     return cells
 
 

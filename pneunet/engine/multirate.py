@@ -131,7 +131,7 @@ class _Group:
                                   for c in cells], dtype=int).reshape(len(cells), -1)
         self.batch.boundary_cols = self.hub_cols
         self.n_hub = len(part.hub_nodes)
-        self.corners = radau.Corners(*cell_corners(corners, cells))
+        self.corners = radau.Corners(*_cell_corners(corners, cells))
         self.times, self.out = times, out
         self.next_out = np.ones(len(cells), dtype=int)
         self.t_start, self.span = t_start, t_stop - t_start
@@ -268,7 +268,7 @@ class _Hub:
         cell = Cell(part.hub_elements, list(part.hub_nodes), [], list(part.hub_sources))
         self.batch = CellBatch(circuit, [cell], hub_nodes=part.hub_nodes, title="hub")
         self.cols = np.array([dae.node_index(n) for n in cell.nodes])
-        own, jumps = cell_corners(corners, [cell])
+        own, jumps = _cell_corners(corners, [cell])
         self.own_corners, self.own_jumps = own[0], jumps[0]
         self.times, self.out = times, out
         self.next_out = np.ones(1, dtype=int)
@@ -485,7 +485,7 @@ def _shared(shape):
     return np.frombuffer(mmap.mmap(-1, max(8 * size, 8)), dtype=float, count=size).reshape(shape)
 
 
-def cell_corners(corners, cells):
+def _cell_corners(corners, cells):
     """Per cell: the corners and jumps (s) of its elements' inputs, from ``corners``
     (:meth:`CircuitDAE.instance_corners`)."""
     times, jumps = [], []
@@ -524,15 +524,10 @@ _ALONE = None  # what the forked workers of _run_independently read
 def _run_cells(indices):
     """Run the cells ``indices`` of ``_ALONE``: (nodes, pressures on the output times,
     steps, jumps) for each."""
-    from .circuit import Circuit
-
     circuit, cells, single_rate, (t_stop, t_step, t_start), times = _ALONE
     results = []
     for cell in (cells[i] for i in indices):
-        sub = Circuit(circuit.title, circuit.options)
-        for name in cell.sources + cell.elements:
-            sub.elements[name] = circuit.elements[name]
-        sub.initial.update({n: v for n, v in circuit.initial.items() if n in cell.nodes})
+        sub = circuit.subcircuit(cell.sources + cell.elements, cell.nodes)
         sol = single_rate(sub, t_stop, t_step, t_start)
         values = np.column_stack([np.interp(times, sol.t, sol.pressure(n)) for n in cell.nodes])
         results.append((cell.nodes, values, int(sol.stats.get("steps", 0)),

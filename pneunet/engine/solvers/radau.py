@@ -312,17 +312,18 @@ def _check_step(problem, st, active, h, systems):
 def _newton_matrices(jac, mass, h, active):
     """Inverses of the real and complex iteration matrices γ/h·M + J and
     (α − iβ)/h·M + J per system, (G, k, k) each (identity for inactive systems)."""
-    k = jac.shape[1]
-    if active.all():
-        scale = 1.0 / h[:, None, None]
-        return _inverse(_GAMMA * scale * mass + jac), _inverse(_ALPHA_BETA * scale * mass + jac)
     rows = np.flatnonzero(active)
     scale = 1.0 / h[rows, None, None]
-    real = np.broadcast_to(np.eye(k), jac.shape).copy()
-    pair = real.astype(complex)
-    real[rows] = _inverse(_GAMMA * scale * mass[rows] + jac[rows])
-    pair[rows] = _inverse(_ALPHA_BETA * scale * mass[rows] + jac[rows])
-    return real, pair
+    inverses = [_inverse(shift * scale * mass[rows] + jac[rows])
+                for shift in (_GAMMA, _ALPHA_BETA)]
+    if rows.size == h.size:
+        return tuple(inverses)
+    out = []
+    for inv in inverses:  # identity for the inactive systems
+        full = np.broadcast_to(np.eye(jac.shape[1], dtype=inv.dtype), jac.shape).copy()
+        full[rows] = inv
+        out.append(full)
+    return tuple(out)
 
 
 def _inverse(m):
