@@ -16,7 +16,7 @@ class Summarized(ABC):
 
     @abstractmethod
     def _summary(self) -> tuple[str, list[tuple[str, str]], str]:
-        raise NotImplementedError
+        """(title, [(label, value)] rows, the line that says how to use the object)."""
 
     def __repr__(self) -> str:
         title, rows, how = self._summary()

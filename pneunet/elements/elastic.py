@@ -38,7 +38,6 @@ class _ElasticVolume(StorageNode):
     @abstractmethod
     def volume(self, p):
         """V (mL), dV/dp (mL/kPa) and d²V/dp² of each instance at pressures p (..., n)."""
-        raise NotImplementedError
 
     def capacitance(self, p):
         v, dv, d2v = self.volume(p)

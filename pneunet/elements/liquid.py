@@ -40,7 +40,8 @@ class _LiquidLaw(ElementFamily, ABC):
 
     @abstractmethod
     def law(self, dp, partials):
-        raise NotImplementedError
+        """Mass flow a→b (mg/s) at pressure differences dp = p_a − p_b (kPa), and
+        dṁ/d(dp) (mg/(s·kPa)) when ``partials`` (else None)."""
 
     def outflows(self, t, p, pdot):
         mdot, slope = self.law(p[:, 0] - p[:, 1], partials=True)

@@ -33,7 +33,6 @@ class StorageNode(ElementFamily, ABC):
     @abstractmethod
     def capacitance(self, p):
         """C(p) in mg/kPa and dC/dp, for pressures p (..., n)."""
-        raise NotImplementedError
 
     def outflows(self, t, p, pdot):
         c, dc = self.capacitance(p[:, 0])  # c (n,), dc (n,) or 0
