@@ -143,9 +143,10 @@ class CellBatch:
 class _Inputs:
     """The pressures cells do not solve for — their pinned nodes (sources at each
     cell's own time) and boundary nodes (the driver's ``boundary(t)``) — kept for the
-    last few time arrays: a Radau pass evaluates each stage time several times."""
+    last few read-only time arrays, by identity: a Radau pass evaluates each of its
+    three stage times (which it makes read-only) once per Newton iteration."""
 
-    KEEP = 4
+    KEEP = 3
 
     def __init__(self, pinned, boundary_idx, boundary_cols):
         self.pinned, self.boundary_idx, self._cols = pinned, boundary_idx, boundary_cols
@@ -170,13 +171,14 @@ class _Inputs:
 
     def _values(self, t, boundary):
         for times, fn, values in self._kept:
-            if fn is boundary and times.shape == t.shape and (times == t).all():
+            if times is t and fn is boundary:
                 return values
         values = [family.pinned_pressure_each(t[cell]) for family, _, cell in self.pinned]
         if self.boundary_idx is not None:
             cols = self._cols()
             values.append(boundary(t)[np.arange(cols.shape[0])[:, None], cols])
-        self._kept = [(t.copy(), boundary, values)] + self._kept[:self.KEEP - 1]
+        if not t.flags.writeable:  # cannot change while kept
+            self._kept = [(t, boundary, values)] + self._kept[:self.KEEP - 1]
         return values
 
 

@@ -377,6 +377,8 @@ def _solve_stages(problem, st, h, inverse, weights, active, count):
     residual = np.empty((3, G, k))
     outflow = np.empty((3,) + st.Q.shape)
     stage_times = [st.t + c * h for c in C]
+    for times in stage_times:  # read-only: the problem may keep its inputs at them
+        times.flags.writeable = False
     for _ in range(NEWTON_ITERATIONS):
         rates = _mix(A_INV, Z) / h[None, :, None]
         for i in range(3):
