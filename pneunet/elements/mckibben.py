@@ -38,7 +38,6 @@ from __future__ import annotations
 import warnings
 
 import numpy as np
-from scipy.special import expit
 
 from ..engine.diagnostics import SolverWarning
 from ..errors import ParameterError
@@ -50,6 +49,14 @@ MAGIC_ANGLE_DEG = np.degrees(np.arccos(1.0 / np.sqrt(3.0)))  # 54.7°: no force 
 STOP_STIFFNESS = 1000.0    # N/mm, end stops at no and full contraction (damped: see parts)
 STOP_WIDTH = 0.03          # mm over which a stop engages (softplus)
 VELOCITY_SCALE = 100.0     # mm/s per kPa of the velocity node
+
+
+def _expit(x):
+    """The logistic function 1/(1 + e^−x): scipy's ``expit``, imported on first use (its
+    import takes ~0.2 s that a run without a muscle need not pay)."""
+    from scipy.special import expit
+
+    return expit(x)
 
 
 class LoadWarning(SolverWarning):
@@ -150,9 +157,9 @@ class _Muscle(ElementFamily):
         """x held smoothly within [0, x_max] (softplus over STOP_WIDTH; beyond the stops
         the laws stay at their ends) and its first two derivatives."""
         w = STOP_WIDTH
-        above, s_above = w * np.logaddexp(0.0, x / w), expit(x / w)        # ≈ max(x, 0)
+        above, s_above = w * np.logaddexp(0.0, x / w), _expit(x / w)        # ≈ max(x, 0)
         u = (self._x_max - above) / w
-        s_below = expit(u)
+        s_below = _expit(u)
         held = self._x_max - w * np.logaddexp(0.0, u)                       # ≈ min(·, x_max)
         slope = s_below * s_above
         bend = (s_below * s_above * (1 - s_above)
@@ -186,7 +193,7 @@ class _Muscle(ElementFamily):
         derivatives by x, their engagement e ∈ [0, 1] and de/dx."""
         w = STOP_WIDTH
         low, high = -x / w, (x - self._x_max) / w
-        s_low, s_high = expit(low), expit(high)
+        s_low, s_high = _expit(low), _expit(high)
         slope_low, slope_high = s_low * (1 - s_low) / w, s_high * (1 - s_high) / w
         force = STOP_STIFFNESS * w * (np.logaddexp(0.0, low) - np.logaddexp(0.0, high))
         return (force, -STOP_STIFFNESS * (s_low + s_high),
