@@ -236,6 +236,30 @@ def test_mass_through_the_hub_is_conserved_at_every_output_point(closed_run):
     assert np.abs(ledger - ledger[0]).max() <= 1e-6 * ledger[0]
 
 
+def test_every_accepted_window_ends_with_a_hub_on_the_cells_draw_alone(monkeypatch):
+    """Only a hub run without the draw's slope correction may be accepted (it loses what
+    the cells drew); near convergence a sweep runs that one alone, so there are fewer hub
+    runs than sweeps plus windows (the slope's run and a rerun for every window)."""
+    from pneunet.engine import multirate
+
+    runs = []  # (window start, window end, slope correction all zero)
+    advance = multirate._Hub.advance
+
+    def recorded(self, S, land, drawn, seen, slope, opts, count):
+        runs.append((float(S[0]), float(S[-1]), not np.any(slope)))
+        return advance(self, S, land, drawn, seen, slope, opts, count)
+
+    monkeypatch.setattr(multirate._Hub, "advance", recorded)
+    sol = closed_network().tran(3.0, t_step=0.01)
+    starts = {start for start, _, _ in runs}
+    accepted = [max(i for i, r in enumerate(runs) if r[:2] == (start, end))
+                for start, end, _ in runs if end in starts or end == 3.0]
+    assert len(set(accepted)) == sol.stats["windows"]
+    assert all(runs[i][2] for i in accepted)
+    assert any(not r[2] for r in runs)                  # the slope is used on the way
+    assert len(runs) < sol.stats["sweeps"] + sol.stats["windows"]
+
+
 def test_a_hub_that_is_only_a_volume_can_be_integrated():
     circuit = closed_network(leak=False)
     sol = circuit.tran(0.5, t_step=0.01)
