@@ -323,8 +323,8 @@ class SampleTable:
         self.times = np.asarray(times, dtype=float)
         values, slopes = (np.asarray(a, dtype=float).reshape(self.times.size, -1)
                           for a in (values, slopes))
-        self._coef = _hermite_coefficients(self.times, values, slopes)
-        self._packed = np.stack(self._coef, axis=-1)  # (m − 1, c, 4): one gather per call
+        # (m − 1, c, 4): the cubic's coefficients per interval and signal, one gather a call
+        self._packed = np.stack(_hermite_coefficients(self.times, values, slopes), axis=-1)
         self._last = self.times.size - 2
 
     def _interval(self, t):
@@ -332,12 +332,19 @@ class SampleTable:
                        self._last)  # (np.clip costs more than the search)
         return k, t - self.times[k]
 
-    def curve(self, t):
-        """Values and slopes (t.size, c) of every signal at the times ``t`` (s)."""
+    def value(self, t):
+        """Values (t.size, c) of every signal at the times ``t`` (s)."""
+        c, tau = self._cubics(t)
+        return c[..., 0] + tau * (c[..., 1] + tau * (c[..., 2] + tau * c[..., 3]))
+
+    def slope(self, t):
+        """Slopes (t.size, c) of every signal at the times ``t`` (s), per s."""
+        c, tau = self._cubics(t)
+        return c[..., 1] + tau * (2 * c[..., 2] + 3 * tau * c[..., 3])
+
+    def _cubics(self, t):
         k, tau = self._interval(np.asarray(t, dtype=float))
-        tau = tau[:, None]
-        y, d, c2, c3 = (a[k] for a in self._coef)
-        return y + tau * (d + tau * (c2 + tau * c3)), d + tau * (2 * c2 + 3 * tau * c3)
+        return self._packed[k], tau[:, None]
 
     def at(self, t, columns):
         """Value of signal ``columns[i]`` at time ``t[i]`` (s), arrays of one shape."""

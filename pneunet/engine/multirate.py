@@ -149,8 +149,7 @@ class _Group:
     def set_hub(self, S, value, slope):
         """The hub pressures the cells see: the cubic Hermite through ``value`` and
         ``slope`` (S.size, n_hub) at the times S."""
-        curve = SampleTable(S, value, slope).curve
-        self.batch.boundary = lambda t: curve(t)[0]
+        self.batch.boundary = SampleTable(S, value, slope).value
 
     def draw_now(self):
         """The cells' draw from each hub node now (n_hub,), mg/s."""
@@ -283,7 +282,7 @@ class _Hub:
 
     def begin(self, draw, opts):
         """The hub's state at the start, the cells drawing ``draw`` (n_hub,) mg/s."""
-        self._draw = lambda t: (None, np.broadcast_to(draw, (len(t), draw.size)))
+        self._draw = lambda t: np.broadcast_to(draw, (len(t), draw.size))
         self._inputs.clear()
         self.state = radau.start(self.batch, self.t_start, self.y0, self.times[-1] - self.t_start,
                                  opts.rtol, opts.atol)
@@ -295,8 +294,7 @@ class _Hub:
         if key not in self._inputs:
             if len(self._inputs) > 16:
                 self._inputs.clear()
-            self._inputs[key] = (self._draw(t)[1],
-                                 None if self._seen is None else self._seen(t)[0])
+            self._inputs[key] = (self._draw(t), None if self._seen is None else self._seen(t))
         rate, seen = self._inputs[key]
         if seen is None:
             return rate, None
@@ -308,7 +306,7 @@ class _Hub:
         whose draw grows by ``slope`` (n_hub,) mg/(s·kPa) per kPa of hub pressure,
         landing on the times ``land``; return the hub's pressures and their rates at S
         (M + 1, n_hub) each."""
-        self._draw, self._seen = SampleTable(S, *drawn).curve, SampleTable(S, *seen).curve
+        self._draw, self._seen = SampleTable(S, *drawn).slope, SampleTable(S, *seen).value
         self.slope = slope
         self._inputs.clear()
         values, rates = np.empty((S.size, self.batch.k)), np.empty((S.size, self.batch.k))

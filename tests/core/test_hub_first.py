@@ -97,7 +97,7 @@ def test_sample_table_is_the_cubic_hermite_through_values_and_slopes():
     table = SampleTable(knots, np.column_stack([f(knots), -3 * f(knots)]),
                         np.column_stack([df(knots), -3 * df(knots)]))
     t = np.linspace(0.0, 3.0, 31)
-    values, slopes = table.curve(t)
+    values, slopes = table.value(t), table.slope(t)
     assert np.allclose(values[:, 0], f(t), atol=1e-13) and np.allclose(slopes[:, 1], -3 * df(t))
     assert np.allclose(table.at(t, np.arange(31) % 2), np.where(np.arange(31) % 2, -3, 1) * f(t))
     # a repeated time is a corner: |t − 1| from its one-sided slopes, exact on both sides
