@@ -52,8 +52,8 @@ VELOCITY_SCALE = 100.0     # mm/s per kPa of the velocity node
 
 
 def _expit(x):
-    """The logistic function 1/(1 + e^−x): scipy's ``expit``, imported on first use (its
-    import takes ~0.2 s that a run without a muscle need not pay)."""
+    """The logistic function 1/(1 + e^−x): scipy's ``expit``, imported on first use (a
+    run without a muscle need not import scipy.special: ~30 ms)."""
     from scipy.special import expit
 
     return expit(x)
