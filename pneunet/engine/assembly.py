@@ -237,7 +237,7 @@ class CircuitDAE:
 
     def capacitance(self, t, y) -> np.ndarray:
         """The diagonal of ∂F/∂ẏ: the capacitance (mg/kPa) at each unknown node."""
-        return self.mass_matrix(t, y).diagonal()
+        return self._mass_data(t, y)[1][self._diagonal_at]
 
     def derivative(self, t, y) -> np.ndarray:
         """ẏ consistent with y: M_dd·ẏ_d = −F_d(ẏ=0), ẏ_a = 0 (kPa/s)."""
