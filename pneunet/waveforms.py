@@ -313,6 +313,11 @@ def _hermite_coefficients(times, values, slopes):
             (slopes[:-1] + slopes[1:] - 2 * dy) / (h * h))
 
 
+def _horner(c, tau):
+    """c[..., 0] + c[..., 1]·τ + c[..., 2]·τ² + c[..., 3]·τ³."""
+    return c[..., 0] + tau * (c[..., 1] + tau * (c[..., 2] + tau * c[..., 3]))
+
+
 class SampleTable:
     """c signals known with their slopes at shared, increasing sample times (m,):
     between two samples the cubic Hermite through both values and both slopes (C¹).
@@ -334,8 +339,7 @@ class SampleTable:
 
     def value(self, t):
         """Values (t.size, c) of every signal at the times ``t`` (s)."""
-        c, tau = self._cubics(t)
-        return c[..., 0] + tau * (c[..., 1] + tau * (c[..., 2] + tau * c[..., 3]))
+        return _horner(*self._cubics(t))
 
     def slope(self, t):
         """Slopes (t.size, c) of every signal at the times ``t`` (s), per s."""
@@ -349,8 +353,7 @@ class SampleTable:
     def at(self, t, columns):
         """Value of signal ``columns[i]`` at time ``t[i]`` (s), arrays of one shape."""
         k, tau = self._interval(np.asarray(t, dtype=float))
-        c = self._packed[k, columns]
-        return c[..., 0] + tau * (c[..., 1] + tau * (c[..., 2] + tau * c[..., 3]))
+        return _horner(self._packed[k, columns], tau)
 
 
 class Sampled(Waveform):

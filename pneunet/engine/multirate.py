@@ -385,6 +385,7 @@ def _relax(groups, hub, t_start, t_stop, opts, count, done) -> dict:
             group.save()
         saved_hub = hub.snapshot()
         slope = sum(group.draw_slope() for group in groups)
+        no_slope = np.zeros_like(slope)  # the hub drawing exactly what the cells drew
         history = _Anderson(opts)
         change = np.inf
         for sweep in range(1, MAX_SWEEPS + 1):
@@ -401,12 +402,12 @@ def _relax(groups, hub, t_start, t_stop, opts, count, done) -> dict:
             # draw alone, no slope) instead of the slope's, which would be run again
             exact = change <= EXACT_HUB_WITHIN * COUPLING_TOL
             hub.restore(saved_hub)
-            new = hub.advance(S, land, (mass, rate), p, 0.0 * slope if exact else slope, opts,
+            new = hub.advance(S, land, (mass, rate), p, no_slope if exact else slope, opts,
                               count)
             change = _change(new, p, opts)
             if change <= COUPLING_TOL and not exact:
                 hub.restore(saved_hub)
-                new = hub.advance(S, land, (mass, rate), p, 0.0 * slope, opts, count)
+                new = hub.advance(S, land, (mass, rate), p, no_slope, opts, count)
                 change = _change(new, p, opts)
             if change <= COUPLING_TOL:
                 break

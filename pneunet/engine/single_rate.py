@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import SolverError
+from ..waveforms import SampleTable
 from .solution import build_solution
 from .solvers import available_backends
 from .solvers.base import EVENT, FAILED, Segment
@@ -176,12 +177,10 @@ class _Record:
             t_end = seg.t[-1]
             want = self.outputs[(self.outputs > self.emitted) & (self.outputs < t_end)]
             if want.size:
-                from .solvers.interpolate import hermite
-
                 ts = np.concatenate([[t0], seg.t])
                 self.chunks_t.append(want)
-                self.chunks_y.append(hermite(ts, np.vstack([y0, seg.y]),
-                                             np.vstack([yp0, seg.yp]), want))
+                self.chunks_y.append(SampleTable(ts, np.vstack([y0, seg.y]),
+                                                 np.vstack([yp0, seg.yp])).value(want))
                 self.emitted = want[-1]
             if keep_end:
                 self.point(t_end, seg.y[-1], seg.yp[-1])

@@ -1,22 +1,12 @@
-"""Dense output between stored integrator steps: piecewise cubic Hermite.
+"""Dense output within one integrator step: the cubic Hermite through its two ends.
 
 Between two accepted steps (t_k, y_k, ẏ_k) and (t_k+1, y_k+1, ẏ_k+1) the cubic
 matching both values and both slopes has an error O(h⁴), below the step's own
 local error for the BDF orders 1–5 at the tolerances pneunet uses, so the output
-grid no longer sets the step size (docs/numerics.md).
+grid no longer sets the step size (docs/numerics.md).  Many steps of one solution at
+once: :class:`pneunet.waveforms.SampleTable`.
 """
 from __future__ import annotations
-
-import numpy as np
-
-
-def hermite(t: np.ndarray, y: np.ndarray, yp: np.ndarray, times: np.ndarray) -> np.ndarray:
-    """Values at ``times`` (m,) ⊂ [t[0], t[-1]] of the cubic Hermite interpolant of
-    the rows ``y``, ``yp`` (k, n) at the increasing times ``t`` (k,); shape (m, n)."""
-    k = np.clip(np.searchsorted(t, times, side="right") - 1, 0, len(t) - 2)
-    h = (t[k + 1] - t[k])[:, None]
-    return hermite_step((times - t[k])[:, None] / h, h, y[k], yp[k], y[k + 1], yp[k + 1],
-                        slope=False)[0]
 
 
 def hermite_step(s, h, y0, d0, y1, d1, slope=True):
