@@ -370,12 +370,7 @@ def _relax(groups, hub, t_start, t_stop, opts, count, done) -> dict:
             H = t_stop - T
         m = SAMPLES if hub.state.fresh[0] else int(np.clip(np.ceil(H / hub.state.h[0]),
                                                             SAMPLES, MAX_SAMPLES))
-        S = T + H * np.arange(m + 1) / m
-        S[-1] = T + H
-        # the output times inside are samples of the draw too
-        outputs = hub.times[(hub.times > T) & (hub.times < T + H)]
-        S = np.union1d(S, outputs[np.min(np.abs(outputs[:, None] - S[None, :]), axis=1)
-                                  > 1e-9 * H]) if outputs.size else S
+        S = _samples(T, H, m, hub.times)
         # the hub's steps land on every sample (the knots of its piecewise-cubic draw):
         # its integral of the draw is exact, so it loses what the cells drew
         land = S[1:-1]
@@ -453,6 +448,20 @@ class _Anderson:
             return result
         n = result[0].size
         return mixed[:n].reshape(result[0].shape), mixed[n:].reshape(result[1].shape)
+
+
+def _samples(T, H, m, outputs):
+    """The sample times (s) of the window [T, T + H]: its ends, the ``outputs`` inside
+    (the draw is known there exactly) and, between consecutive ones further apart than
+    H/m, evenly spaced points at most H/m apart."""
+    inside = outputs[(outputs > T + 1e-9 * H) & (outputs < T + H - 1e-9 * H)]
+    knots = np.concatenate([[T], inside, [T + H]])
+    gaps = np.diff(knots)
+    pieces = np.maximum(np.ceil(gaps * (m / H) - 1e-9), 1).astype(int)
+    first = np.repeat(knots[:-1], pieces)
+    step = np.repeat(gaps / pieces, pieces)
+    within = np.arange(pieces.sum()) - np.repeat(np.cumsum(pieces) - pieces, pieces)
+    return np.append(first + within * step, T + H)
 
 
 def _change(new, seen, opts) -> float:

@@ -498,9 +498,10 @@ def test_the_multirate_result_does_not_depend_on_passes_over_active_cells(monkey
     assert sum(subsets) > 100  # many passes really worked on a subset
     monkeypatch.setattr(cells, "SUBSET_FRACTION", 0.0)
     whole = independent_cells(30, 1e-6, "multirate").tran(3.0, t_step=0.05)
-    assert sol.stats["steps"] == whole.stats["steps"]
     # the same numbers up to the order of summation, whose round-off can tip a Newton
-    # convergence test: within the run's rtol (a wrong cell mapping is off by far more)
+    # convergence test (a few steps of ~11,600): within the run's rtol (a wrong cell
+    # mapping is off by far more)
+    assert abs(sol.stats["steps"] - whole.stats["steps"]) <= 1e-3 * whole.stats["steps"]
     for node in ["line"] + [f"act{k}" for k in range(30)]:
         np.testing.assert_allclose(sol.pressure(node), whole.pressure(node), rtol=1e-6)
 
