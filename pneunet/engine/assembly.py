@@ -47,6 +47,7 @@ class CircuitDAE:
     def _assemble(self, circuit) -> None:
         self.circuit = circuit
         self.options = circuit.options
+        self._corners = {}  # (t_start, t_stop) → instance_corners
         context = FamilyContext(circuit.options)
         specs = list(circuit.elements.values())
         pinned_by = {}
@@ -257,20 +258,22 @@ class CircuitDAE:
 
     # -- breakpoints and reporting --------------------------------------------------------
     def jumps(self, t_start, t_stop) -> np.ndarray:
-        return _distinct([b.family.jumps(t_start, t_stop) for b in self._blocks])
+        return distinct_times([b.family.jumps(t_start, t_stop) for b in self._blocks])
 
     def breakpoints(self, t_start, t_stop) -> np.ndarray:
-        return _distinct([b.family.breakpoints(t_start, t_stop) for b in self._blocks])
+        return distinct_times([b.family.breakpoints(t_start, t_stop) for b in self._blocks])
 
     def instance_corners(self, t_start, t_stop) -> dict[str, tuple[np.ndarray, np.ndarray]]:
         """{element name: (its input's corners, the jumps among them)} in (t_start, t_stop)
         for every element with time-varying inputs, s."""
-        out = {}
-        for block in self._blocks:
-            corners = block.family.instance_corners(t_start, t_stop)
-            if corners:
-                out.update(zip(block.family.names, corners))
-        return out
+        key = (float(t_start), float(t_stop))
+        if key not in self._corners:  # asked for by the method's choice and by the method
+            out = self._corners[key] = {}
+            for block in self._blocks:
+                corners = block.family.instance_corners(t_start, t_stop)
+                if corners:
+                    out.update(zip(block.family.names, corners))
+        return self._corners[key]
 
     def initial_state(self, t0: float) -> np.ndarray:
         """Initial guess: ``.ic`` values, then volumes' p0, then ambient pressure (kPa)."""
@@ -431,7 +434,7 @@ class AlgebraicBlock:
         return res, jac, np.maximum(scale, 1e-300)
 
 
-def _distinct(times: list[np.ndarray]) -> np.ndarray:
+def distinct_times(times: list[np.ndarray]) -> np.ndarray:
     """Sorted times (s) with those equal up to rounding (1e-12 relative) merged: sources
     whose corners coincide in exact arithmetic (16 + 0.01 and 2·8 + 0.01) give one stop."""
     t = np.unique(np.concatenate(times)) if times else np.empty(0)

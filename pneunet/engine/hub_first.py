@@ -38,12 +38,11 @@ from .single_rate import integrate
 from .solution import Solution, build_solution
 
 
-def transient(circuit, part: Partition, t_stop: float, t_step: float | None, t_start: float,
-              y0: np.ndarray, algebraic: set[str], single_rate) -> Solution:
+def transient(circuit, dae: CircuitDAE, part: Partition, t_stop: float, t_step: float | None,
+              t_start: float, y0: np.ndarray, algebraic: set[str], single_rate) -> Solution:
     """As :func:`pneunet.engine.multirate.transient`, for a partition whose hub no cell
     draws from (``part.read_only_hub``)."""
     wall = _time.perf_counter()
-    dae = CircuitDAE(circuit)
     table, hub_nodes, corners, hub_steps = _integrate_hub(
         circuit.subcircuit(part.hub_sources + part.hub_elements, part.hub_nodes,
                            f"{circuit.title} (hub)"),
@@ -54,7 +53,7 @@ def transient(circuit, part: Partition, t_stop: float, t_step: float | None, t_s
     index = [dae.node_index(n) for n in cells_dae.node_names]
     hub_index = [dae.node_index(n) for n in hub_nodes]
     try:
-        sol = multirate(cells, partition(cells), t_stop, t_step, t_start, y0[index],
+        sol = multirate(cells, cells_dae, partition(cells), t_stop, t_step, t_start, y0[index],
                         algebraic - set(hub_nodes), single_rate)
     except SolverError as err:
         partial = None if err.partial is None else _whole(dae, err.partial, index, hub_index,

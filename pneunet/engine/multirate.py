@@ -60,13 +60,13 @@ PARALLEL_MIN_CELLS = 8     # independent cells from which they run in worker pro
 PARALLEL_MIN_BATCHED = 300   # batched cells from which they are split over worker processes
 
 
-def transient(circuit, part: Partition, t_stop: float, t_step: float | None, t_start: float,
-              y0: np.ndarray, algebraic: set[str], single_rate) -> Solution:
-    """Multirate transient from the full state ``y0`` (kPa, in the circuit DAE's order).
+def transient(circuit, dae: CircuitDAE, part: Partition, t_stop: float, t_step: float | None,
+              t_start: float, y0: np.ndarray, algebraic: set[str], single_rate) -> Solution:
+    """Multirate transient of ``circuit`` (its DAE ``dae``) from the full state ``y0``
+    (kPa, in the DAE's order).
     Cells with ``algebraic`` nodes (no volume; folds possible) and no hub run each on
     its own through ``single_rate(circuit, t_stop, t_step, t_start)``."""
     wall = _time.perf_counter()
-    dae = CircuitDAE(circuit)
     opts = circuit.options
     times = (np.append(np.arange(t_start, t_stop, t_step)[1:], t_stop) if t_step else
              np.linspace(t_start, t_stop, DEFAULT_OUTPUTS + 1)[1:])

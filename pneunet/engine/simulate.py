@@ -11,7 +11,7 @@ import time as _time
 
 import numpy as np
 
-from .assembly import CircuitDAE
+from .assembly import CircuitDAE, distinct_times
 from .diagnostics import captured
 from ..errors import ParameterError, SolverError
 from .solution import OperatingPoint, Solution, build_solution
@@ -101,7 +101,7 @@ def transient(circuit, t_stop: float, *, t_step: float | None = None, t_start: f
             from .multirate import transient as multirate
 
         algebraic = {dae.node_names[i] for i in dae.algebraic_idx}
-        return multirate(circuit, part, t_stop, t_step, t_start, y, algebraic, _single_rate)
+        return multirate(circuit, dae, part, t_stop, t_step, t_start, y, algebraic, _single_rate)
 
     outputs = (np.append(np.arange(t_start, t_stop, t_step)[1:], t_stop) if t_step else None)
     record, steps, integrator = integrate(dae, t_start, t_stop, y, yp, outputs, backend,
@@ -169,9 +169,9 @@ def transient_method(circuit, span=(0.0, 1.0)) -> str:
 def _schedules(dae, t_start, t_stop) -> float:
     """How many different switching schedules the inputs follow: their distinct corners
     in (t_start, t_stop) over the mean number of one element's corners (0: none)."""
-    own = [len(c[0]) for c in dae.instance_corners(t_start, t_stop).values()]
-    mean = np.mean(own) if own else 0.0
-    return dae.breakpoints(t_start, t_stop).size / mean if mean > 0 else 0.0
+    own = [c[0] for c in dae.instance_corners(t_start, t_stop).values()]
+    mean = np.mean([len(c) for c in own]) if own else 0.0
+    return distinct_times(own).size / mean if mean > 0 else 0.0
 
 
 def _drives(dae, part, span) -> int:
