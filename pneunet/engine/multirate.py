@@ -277,7 +277,7 @@ class _Hub:
         self.batch.injection = self._injection
         self._draw = self._seen = None
         self._inputs = {}  # time (s) → (draw, seen pressures) at it
-        self.slope = 0.0
+        self.slope = None  # (1, n_hub) mg/(s·kPa); None: the draw alone
         self.state = None
 
     def begin(self, draw, opts):
@@ -298,7 +298,7 @@ class _Hub:
         rate, seen = self._inputs[key]
         if seen is None:
             return rate, None
-        return rate + self.slope * (Y - seen), np.broadcast_to(self.slope, Y.shape)
+        return rate + self.slope * (Y - seen), self.slope
 
     def advance(self, S, land, drawn, seen, slope, opts, count):
         """Integrate across the window ``S`` with the cells' draw ``drawn`` (mass and
@@ -306,8 +306,10 @@ class _Hub:
         whose draw grows by ``slope`` (n_hub,) mg/(s·kPa) per kPa of hub pressure,
         landing on the times ``land``; return the hub's pressures and their rates at S
         (M + 1, n_hub) each."""
-        self._draw, self._seen = SampleTable(S, *drawn).slope, SampleTable(S, *seen).value
-        self.slope = slope
+        corrected = bool(np.any(slope))
+        self._draw = SampleTable(S, *drawn).slope
+        self._seen = SampleTable(S, *seen).value if corrected else None
+        self.slope = np.asarray(slope, dtype=float)[None, :] if corrected else None
         self._inputs.clear()
         values, rates = np.empty((S.size, self.batch.k)), np.empty((S.size, self.batch.k))
         values[0], rates[0] = self.state.Y[0], self.state.Yd[0]
