@@ -100,7 +100,7 @@ def transient(circuit, dae: CircuitDAE, part: Partition, t_stop: float, t_step: 
             hub = _Hub(circuit, part, dae, corners, y0, times, out, t_start)
             stats.update(_relax(groups, hub, t_start, t_stop, opts, count, done))
         elif groups:
-            _advance_all(groups, t_stop, None, opts, count)
+            _advance_all(groups, count, "advance", t_stop, None, opts)
     except SolverError as err:
         if not part.hub_nodes:  # each cell recorded its outputs up to where it got
             done[0] = min((g.earliest() for g in groups), default=t_start)
@@ -159,10 +159,22 @@ class _Group:
         """The time (s) every cell has reached."""
         return float(self.state.t.min()) if self.state is not None else self.t_start
 
-    def advance_later(self, t_end, S, opts):
-        """:meth:`advance`, its result given by the returned function."""
-        result = self.advance(t_end, S, opts)
+    def later(self, name, *args):
+        """Method ``name`` called with ``args``, its result given by the returned function."""
+        result = getattr(self, name)(*args)
         return lambda: result
+
+    def start_window(self):
+        """:meth:`save` the state at the start of a window; return :meth:`draw_slope`."""
+        self.save()
+        return self.draw_slope()
+
+    def sweep(self, S, value, slope, t_end, opts):
+        """Back to the start of the window, the hub given by ``value`` and ``slope`` at the
+        times S (:meth:`set_hub`), integrate to ``t_end``: :meth:`advance`."""
+        self.restore()
+        self.set_hub(S, value, slope)
+        return self.advance(t_end, S, opts)
 
     def close(self):
         pass
@@ -242,20 +254,19 @@ class _Group:
 
 class _GroupProcess:
     """A :class:`_Group` built and kept in a worker process of its own (its outputs in
-    shared memory): the same methods, and :meth:`advance_later` runs while the caller
-    goes on."""
+    shared memory): the same methods, and :meth:`later` runs one while the caller goes
+    on."""
 
     def __init__(self, *args):
         self._servant = Servant(_Group, *args)
 
     def __getattr__(self, name):
-        if name in ("begin", "set_hub", "draw_now", "earliest", "draw_slope", "save",
-                    "restore"):
+        if name in ("begin", "set_hub", "draw_now", "earliest", "restore"):
             return lambda *args: self._servant.call(name, *args)
         raise AttributeError(name)
 
-    def advance_later(self, t_end, S, opts):
-        self._servant.send("advance", t_end, S, opts)
+    def later(self, name, *args):
+        self._servant.send(name, *args)
         return self._servant.receive
 
     def close(self):
@@ -335,22 +346,28 @@ class _Hub:
         self.state, self.next_out = saved[0].copy(), saved[1].copy()
 
 
-def _advance_all(groups, t_end, S, opts, count):
-    """Advance every group to ``t_end`` (those in worker processes at the same time);
-    return what each drew (see :meth:`_Group.advance`)."""
-    waiting = [g.advance_later(t_end, S, opts) for g in groups]
-    drawn, failure = [], None
+def _on_all(groups, name, *args):
+    """Call method ``name`` of every group (those in worker processes at the same time);
+    return the results in order."""
+    waiting = [g.later(name, *args) for g in groups]
+    results, failure = [], None
     for wait in waiting:  # every reply is collected, so the workers are idle after
         try:
-            counted, group_drawn = wait()
+            results.append(wait())
         except SolverError as err:
             failure = failure or err
-            continue
-        count.add(counted)
-        drawn.append(group_drawn)
     if failure is not None:
         raise failure
-    return drawn
+    return results
+
+
+def _advance_all(groups, count, name, *args):
+    """Integrate every group by its method ``name`` (:meth:`_Group.advance` or
+    :meth:`_Group.sweep`) with ``args``; add up their counters; return what each drew."""
+    results = _on_all(groups, name, *args)
+    for counted, _ in results:
+        count.add(counted)
+    return [drawn for _, drawn in results]
 
 
 def _relax(groups, hub, t_start, t_stop, opts, count, done) -> dict:
@@ -378,20 +395,16 @@ def _relax(groups, hub, t_start, t_stop, opts, count, done) -> dict:
         land = S[1:-1]
         p = (hub.state.Y[0] + (S - T)[:, None] * hub.state.Yd[0],
              np.repeat(hub.state.Yd, S.size, axis=0))
-        for group in groups:
-            group.save()
+        slope = sum(_on_all(groups, "start_window"))
         saved_hub = hub.snapshot()
-        slope = sum(group.draw_slope() for group in groups)
         no_slope = np.zeros_like(slope)  # the hub drawing exactly what the cells drew
         history = _Anderson(opts)
         change = np.inf
         for sweep in range(1, MAX_SWEEPS + 1):
             sweeps += 1
             mass, rate = np.zeros_like(p[0]), np.zeros_like(p[0])
-            for group in groups:
-                group.restore()
-                group.set_hub(S, p[0], p[1])
-            for group_mass, group_rate in _advance_all(groups, T + H, S, opts, count):
+            for group_mass, group_rate in _advance_all(groups, count, "sweep", S, p[0], p[1],
+                                                       T + H, opts):
                 mass += group_mass
                 rate += group_rate
             # once the last sweep moved the samples by at most EXACT_HUB_WITHIN acceptances,
