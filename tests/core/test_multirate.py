@@ -481,6 +481,50 @@ def test_a_pass_over_some_cells_evaluates_them_as_the_whole_batch_does(monkeypat
     assert batch.rows(np.arange(n - 2)) == (None, None)
 
 
+def test_three_stages_evaluated_at_once_equal_three_evaluations(monkeypatch):
+    """CellBatch.evaluate_stages (every family once for a Radau pass's three stages)
+    gives the residuals and boundary outflows of three evaluations, for the whole batch
+    and for a subset, at stage times that differ per cell and stage (each cell's own
+    PULSE phase and boundary pressure)."""
+    from pneunet.engine import cells
+    from pneunet.engine.cells import CellBatch
+    from pneunet.engine.partition import partition
+
+    monkeypatch.setattr(cells, "SUBSET_MIN_CELLS", 1)
+    n = 40
+    circuit = independent_cells(n, 1e-6, "multirate")
+    part = partition(circuit)
+    batch = CellBatch(circuit, [part.cells[i] for i in part.groups[0]])
+    rng = np.random.default_rng(7)
+    times = [rng.uniform(0.0, 4.0, n) for _ in range(3)]
+    for t in times:
+        t.flags.writeable = False
+    Y = rng.uniform(100.0, 480.0, (3, n, batch.k))
+    Yd = rng.normal(0.0, 50.0, (3, n, batch.k))
+    batch.boundary = lambda t: (470.0 + 5.0 * np.sin(t))[:, None]
+    one_by_one = [batch.evaluate(t, y, d) for t, y, d in zip(times, Y, Yd)]
+    for _ in range(2):  # the second time from the inputs kept for these stage times
+        res, out = batch.evaluate_stages(times, Y, Yd)
+        for stage, (r, o) in enumerate(one_by_one):
+            np.testing.assert_allclose(res[stage], r, rtol=1e-13, atol=1e-12)
+            np.testing.assert_allclose(out[stage], o, rtol=1e-13, atol=1e-12)
+    assert np.ptp(res[:, :, 0]) > 1.0 and np.ptp(out) > 0  # really different per stage
+    later = [t + 0.37 for t in times]  # new stage times: nothing kept may be reused
+    for t in later:
+        t.flags.writeable = False
+    res, out = batch.evaluate_stages(later, Y, Yd)
+    for stage, t in enumerate(later):
+        r, o = batch.evaluate(t, Y[stage], Yd[stage])
+        np.testing.assert_allclose(res[stage], r, rtol=1e-13, atol=1e-12)
+        np.testing.assert_allclose(out[stage], o, rtol=1e-13, atol=1e-12)
+    rows = np.array([1, 4, 18, 30])
+    _, view = batch.rows(rows)
+    res, out = view.evaluate_stages([t[rows] for t in times], Y[:, rows], Yd[:, rows])
+    for stage, (r, o) in enumerate(one_by_one):
+        np.testing.assert_allclose(res[stage], r[rows], rtol=1e-13, atol=1e-12)
+        np.testing.assert_allclose(out[stage], o[rows], rtol=1e-13, atol=1e-12)
+
+
 def test_the_multirate_result_does_not_depend_on_passes_over_active_cells(monkeypatch):
     """Passes over the active cells alone give the result of passes over all cells."""
     from pneunet.engine import cells

@@ -204,7 +204,8 @@ def advance(problem, st: BatchState, t_end: float, rtol: float, atol: float,
     ``on_step(rows, before, after)`` is called after each pass with the systems that
     took a step and their (t, Y, Yd, Q, M) before and after it.  A problem with a
     ``rows(active)`` method (:class:`~pneunet.engine.cells.CellBatch`) may give an
-    evaluator of the active systems alone; a pass then works on them only.
+    evaluator of the active systems alone; a pass then works on them only.  One with
+    ``evaluate_stages`` evaluates a Newton iteration's three stages in one call.
     """
     count = count if count is not None else Counters()
     everyone = np.arange(st.Y.shape[0])
@@ -379,10 +380,14 @@ def _solve_stages(problem, st, h, inverse, weights, active, count):
     stage_times = [st.t + c * h for c in C]
     for times in stage_times:  # read-only: the problem may keep its inputs at them
         times.flags.writeable = False
+    stacked = getattr(problem, "evaluate_stages", None)
     for _ in range(NEWTON_ITERATIONS):
         rates = _mix(A_INV, Z) / h[None, :, None]
-        for i in range(3):
-            residual[i], outflow[i] = problem.evaluate(stage_times[i], st.Y + Z[i], rates[i])
+        if stacked is not None:
+            residual, outflow = stacked(stage_times, st.Y[None] + Z, rates)
+        else:
+            for i in range(3):
+                residual[i], outflow[i] = problem.evaluate(stage_times[i], st.Y + Z[i], rates[i])
         count.residuals += 3
         delta = _newton_update(inverse, residual)
         scaled = delta * weights[None]
