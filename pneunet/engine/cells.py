@@ -128,12 +128,12 @@ class CellBatch:
     def evaluate_stages(self, times, Y, Yd):
         """R (3, G, k) and boundary outflows (3, G, nb) at the three stage times ``times``
         (three (G,) arrays) with Y, Yd (3, G, k): one evaluation of each family for all
-        three (:meth:`_Rows.evaluate_stages`); stage by stage for the hub (its injection,
-        and elements that may depend on time)."""
-        if self.injection is None and self.G > 1:
-            return self._whole.evaluate_stages(times, Y, Yd)
-        results = [self.evaluate(t, y, d) for t, y, d in zip(times, Y, Yd)]
-        return np.stack([r[0] for r in results]), np.stack([r[1] for r in results])
+        three (:meth:`_Rows.evaluate_stages`), plus the injection stage by stage."""
+        res, out = self._whole.evaluate_stages(times, Y, Yd)
+        if self.injection is not None:
+            for stage, (t, y) in enumerate(zip(times, Y)):
+                res[stage] += self.injection(t, y)[0]
+        return res, out
 
     def rows(self, active: np.ndarray):
         """An evaluator of (at least) the cells ``active`` (sorted indices) and the cells
@@ -185,7 +185,7 @@ class _Inputs:
         P.reshape(-1)[flat_idx] = Y  # 4× faster than P[:, idx] = Y
         Pdot.reshape(-1)[flat_idx] = Yd
         if self._stage_nodes is None:
-            nodes = np.concatenate([n.ravel() for n in self._nodes()])
+            nodes = np.concatenate([n.ravel() for n in self._nodes()] + [np.empty(0, int)])
             self._stage_nodes = P.shape[1] * np.arange(3)[:, None] + nodes[None, :]
         P.reshape(-1)[self._stage_nodes] = self._stage_values(times, batch.boundary)
         return P, Pdot
@@ -204,7 +204,7 @@ class _Inputs:
         if self.boundary_idx is not None:
             cols = np.tile(self._cols(), (3, 1))
             values.append(boundary(t)[np.arange(3 * m)[:, None], cols].reshape(3, -1))
-        values = np.concatenate(values, axis=1)
+        values = np.concatenate(values + [np.empty((3, 0))], axis=1)
         if not times[0].flags.writeable:  # cannot change while kept
             self._stage_kept = (times[0], boundary, values)
         return values
@@ -319,7 +319,9 @@ class _Rows:
             self._stage_idx = n * np.arange(3)[:, None, None] + self.idx[None]
         P, Pdot = self._inputs.fill_stages(batch, self._stage_buffers, self._stage_idx, times,
                                            Y, Yd)
-        flows = [family.flows(_NO_TIMES, np.take(P, nodes, axis=1),
+        # the hub (a batch of one) may hold elements that depend on time; cells do not
+        time = np.array([t[0] for t in times]) if batch.G == 1 else _NO_TIMES
+        flows = [family.flows(time, np.take(P, nodes, axis=1),
                               np.take(Pdot, nodes, axis=1)).ravel()
                  for family, nodes in self.blocks]  # (np.take: 4× faster than P[:, nodes])
         total = np.bincount(self._flow_to_stages, weights=np.concatenate(flows),
