@@ -134,7 +134,9 @@ class StepGuide:
     test; only the proposals change."""
 
     def __init__(self, G: int, start: float, rows: np.ndarray, ends: np.ndarray):
-        order = np.lexsort((ends, rows))
+        """``rows`` and ``ends``: the systems and step ends of the accepted steps in the
+        order they were taken (so each system's ends increase)."""
+        order = np.argsort(rows, kind="stable")  # by system, each in time order
         rows, ends = rows[order], ends[order]
         counts = np.bincount(rows, minlength=G)
         first = np.concatenate([[0], np.cumsum(counts)[:-1]])
