@@ -22,7 +22,7 @@ N distinct edges the step count grows with N and any such solver costs ~N².
 Run:  python benchmarks/bench_scaling.py [--quick] [--sizes 10,100,1000,3000]
           [--rtol 1e-5] [--ngspice-max 1000] [--no-scipy] [--no-ngspice] [--oscillator]
       python benchmarks/bench_scaling.py --schedule independent|groups
-          [--sizes 100,300,1000,3000,10000] [--rtol 5e-6] [--single-max 3000]
+          [--sizes 100,300,1000,3000,10000] [--rtol 5e-6] [--single-max 3000] [--repeat 5]
           (multirate against single-rate IDA: benchmarks/scaling_schedules.py)
 """
 from __future__ import annotations
@@ -389,13 +389,16 @@ def main(argv=None):
                     help="with --schedule: largest N run single-rate")
     ap.add_argument("--reference-max", type=int, default=300,
                     help="with --schedule: largest N with an rtol 1e-8 reference")
+    ap.add_argument("--repeat", type=int, default=1,
+                    help="with --schedule: multirate runs per N (median shown)")
     args = ap.parse_args(argv)
     if args.schedule:
         from scaling_schedules import study
 
         sizes = [100, 300] if args.quick else [int(s) for s in (
             args.sizes if args.sizes != "10,100,1000,3000" else "100,300,1000,3000,10000").split(",")]
-        return study(sizes, args.schedule, args.rtol or 5e-6, args.single_max, args.reference_max)
+        return study(sizes, args.schedule, args.rtol or 5e-6, args.single_max, args.reference_max,
+                     args.repeat)
     sizes = [10, 100] if args.quick else [int(s) for s in args.sizes.split(",")]
     have_spice = shutil.which("ngspice") is not None and not args.no_ngspice
     if not have_spice and not args.no_ngspice:

@@ -79,10 +79,13 @@ def error(run, ref) -> float:
                      for j in range(1, run.shape[1])))
 
 
-def study(sizes, schedule, rtol, single_max, reference_max):
-    """Print the table of issue 18 for one schedule; return its rows."""
+def study(sizes, schedule, rtol, single_max, reference_max, repeat=1):
+    """Print the table of issue 18 for one schedule; return its rows.  ``repeat``: runs
+    of the multirate method per N, its median time shown (and the range): this machine's
+    speed drifts by ±20 % within minutes."""
     print(f"{schedule} schedule, {T_STOP:g} s, rtol {rtol:g}, atol 1e-5; fresh process per run; "
-          f"error against single-rate IDA at rtol 1e-8 (N ≤ {reference_max})")
+          f"error against single-rate IDA at rtol 1e-8 (N ≤ {reference_max})"
+          + (f"; multirate: median of {repeat} runs (range)" if repeat > 1 else ""))
     print(f"{'N':>6} | {'multirate s':>11} {'steps':>9} {'MB':>6} {'error kPa':>9} | "
           f"{'single s':>9} {'steps':>7} {'MB':>6} {'error kPa':>9}")
     rows = []
@@ -92,14 +95,19 @@ def study(sizes, schedule, rtol, single_max, reference_max):
         for method in ("multirate", "single"):
             if method == "single" and n > single_max:
                 continue
-            r = row[method] = measure(n, schedule, method, rtol)
+            runs = [measure(n, schedule, method, rtol)
+                    for _ in range(repeat if method == "multirate" else 1)]
+            r = row[method] = runs[0]
+            walls = sorted(run["wall"] for run in runs)
+            r["wall"], r["range"] = float(np.median(walls)), (walls[0], walls[-1])
             r["error"] = error(r.pop("pressures"), ref) if ref is not None else np.nan
         rows.append(row)
         m, s = row["multirate"], row.get("single")
         single = (f"{s['wall']:9.2f} {s['steps']:7d} {s['peak_mb']:6.0f} {s['error']:9.3f}"
                   if s else f"{'(skipped: N > --single-max)':>34}")
+        spread = (f" ({m['range'][0]:.2f}–{m['range'][1]:.2f})" if repeat > 1 else "")
         print(f"{n:6d} | {m['wall']:11.2f} {m['steps']:9d} {m['peak_mb']:6.0f} "
-              f"{m['error']:9.3f} | {single}")
+              f"{m['error']:9.3f} | {single}{spread}")
         sys.stdout.flush()
     walls = {r["N"]: r["multirate"]["wall"] for r in rows}
     if 300 in walls and 3000 in walls:
