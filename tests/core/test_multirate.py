@@ -448,19 +448,24 @@ def test_partition_of_the_scaling_network():
     assert part.largest_cell == 2
 
 
-def test_a_pass_over_some_cells_evaluates_them_as_the_whole_batch_does(monkeypatch):
-    """The evaluator of a subset of cells (CellBatch.rows) gives, for those cells, the
-    residuals, boundary outflows and Newton blocks the whole batch gives, at cell times
-    that differ (each cell's own PULSE phase), with the boundary given by the driver."""
+def _cell_batch(monkeypatch, n):
+    """The CellBatch of ``independent_cells(n)``'s cells, subsets evaluated from 1 cell."""
     from pneunet.engine import cells
     from pneunet.engine.cells import CellBatch
     from pneunet.engine.partition import partition
 
     monkeypatch.setattr(cells, "SUBSET_MIN_CELLS", 1)
-    n = 40
     circuit = independent_cells(n, 1e-6, "multirate")
     part = partition(circuit)
-    batch = CellBatch(circuit, [part.cells[i] for i in part.groups[0]])
+    return CellBatch(circuit, [part.cells[i] for i in part.groups[0]])
+
+
+def test_a_pass_over_some_cells_evaluates_them_as_the_whole_batch_does(monkeypatch):
+    """The evaluator of a subset of cells (CellBatch.rows) gives, for those cells, the
+    residuals, boundary outflows and Newton blocks the whole batch gives, at cell times
+    that differ (each cell's own PULSE phase), with the boundary given by the driver."""
+    n = 40
+    batch = _cell_batch(monkeypatch, n)
     rng = np.random.default_rng(5)
     t = rng.uniform(0.0, 4.0, n)
     Y = rng.uniform(100.0, 480.0, (n, batch.k))
@@ -486,15 +491,8 @@ def test_three_stages_evaluated_at_once_equal_three_evaluations(monkeypatch):
     gives the residuals and boundary outflows of three evaluations, for the whole batch
     and for a subset, at stage times that differ per cell and stage (each cell's own
     PULSE phase and boundary pressure)."""
-    from pneunet.engine import cells
-    from pneunet.engine.cells import CellBatch
-    from pneunet.engine.partition import partition
-
-    monkeypatch.setattr(cells, "SUBSET_MIN_CELLS", 1)
     n = 40
-    circuit = independent_cells(n, 1e-6, "multirate")
-    part = partition(circuit)
-    batch = CellBatch(circuit, [part.cells[i] for i in part.groups[0]])
+    batch = _cell_batch(monkeypatch, n)
     rng = np.random.default_rng(7)
     times = [rng.uniform(0.0, 4.0, n) for _ in range(3)]
     for t in times:
