@@ -154,17 +154,19 @@ class CellBatch:
 
 class _Inputs:
     """The pressures cells do not solve for — their pinned nodes (sources at each
-    cell's own time) and boundary nodes (the driver's ``boundary(t)``) — kept for the
-    last few read-only time arrays, by identity: a Radau pass evaluates each of its
-    three stage times (which it makes read-only) once per Newton iteration."""
+    cell's own time) and boundary nodes (the driver's ``boundary(t)``) — at one set of
+    cell times or at a Radau iteration's three, kept for the last read-only first time
+    array by identity: a pass evaluates its three stage times (which it makes read-only)
+    once per Newton iteration."""
 
-    KEEP = 3
-
-    def __init__(self, pinned, boundary_idx, boundary_cols):
+    def __init__(self, pinned, boundary_idx, boundary_cols, width):
         self.pinned, self.boundary_idx, self._cols = pinned, boundary_idx, boundary_cols
-        self._kept = []  # (times, boundary function, values), newest first
-        self._stage_kept = None  # (first stage's times, boundary function, values)
-        self._stage_nodes = None  # (3, L) flat positions of the inputs in stage buffers
+        nodes = [n for _, n, _ in pinned] + ([boundary_idx] if boundary_idx is not None else [])
+        #: the input nodes, flat, in the order of :meth:`values`'s columns
+        self.nodes = np.concatenate([n.ravel() for n in nodes] + [np.empty(0, int)])
+        #: (3, L) their positions in flattened (3, ``width``) stage buffers
+        self.stage_nodes = width * np.arange(3)[:, None] + self.nodes[None, :]
+        self._kept = None  # (first time array, boundary function, values)
 
     def fill(self, batch, idx, t, Y, Yd):
         """The batch DAE's shared pressure and rate buffers with the cells' unknowns
@@ -173,8 +175,7 @@ class _Inputs:
         p, pdot = dae._p, dae._pdot
         p[idx] = Y
         pdot[idx] = Yd
-        for nodes, values in zip(self._nodes(), self._values(t, batch.boundary)):
-            p[nodes] = values
+        p[self.nodes] = self.values([t], batch.boundary)[0]
         dae._pinned_at = None  # the shared buffer no longer holds one time's pressures
         return p, pdot
 
@@ -184,46 +185,27 @@ class _Inputs:
         P, Pdot = buffers
         P.reshape(-1)[flat_idx] = Y  # 4× faster than P[:, idx] = Y
         Pdot.reshape(-1)[flat_idx] = Yd
-        if self._stage_nodes is None:
-            nodes = np.concatenate([n.ravel() for n in self._nodes()] + [np.empty(0, int)])
-            self._stage_nodes = P.shape[1] * np.arange(3)[:, None] + nodes[None, :]
-        P.reshape(-1)[self._stage_nodes] = self._stage_values(times, batch.boundary)
+        P.reshape(-1)[self.stage_nodes] = self.values(times, batch.boundary)
         return P, Pdot
 
-    def _stage_values(self, times, boundary):
-        """The inputs (3, L) at the three stage times ``times`` (three (m,) arrays), in
-        the order of :meth:`_nodes`: each source and the boundary evaluated once for all
-        three; kept for the last read-only ``times[0]``."""
-        if self._stage_kept is not None and self._stage_kept[0] is times[0] \
-                and self._stage_kept[1] is boundary:
-            return self._stage_kept[2]
-        m = times[0].size
-        t = np.concatenate(times)
-        values = [np.stack([family.pinned_pressure_each(stage[cell]) for stage in times])
-                  .reshape(3, -1) for family, _, cell in self.pinned]
+    def values(self, times, boundary):
+        """The inputs (len(times), L) at each of the cell-time arrays ``times`` (m,), in
+        the order of :attr:`nodes`: each source once per time array, the boundary once
+        for all of them."""
+        kept = self._kept
+        if kept is not None and kept[0] is times[0] and kept[1] is boundary \
+                and len(kept[2]) == len(times):
+            return kept[2]
+        n, m = len(times), times[0].size
+        values = [np.stack([family.pinned_pressure_each(t[cell]) for t in times])
+                  .reshape(n, -1) for family, _, cell in self.pinned]
         if self.boundary_idx is not None:
-            cols = np.tile(self._cols(), (3, 1))
-            values.append(boundary(t)[np.arange(3 * m)[:, None], cols].reshape(3, -1))
-        values = np.concatenate(values + [np.empty((3, 0))], axis=1)
+            cols = np.tile(self._cols(), (n, 1))
+            values.append(boundary(np.concatenate(times))[np.arange(n * m)[:, None], cols]
+                          .reshape(n, -1))
+        values = np.concatenate(values + [np.empty((n, 0))], axis=1)
         if not times[0].flags.writeable:  # cannot change while kept
-            self._stage_kept = (times[0], boundary, values)
-        return values
-
-    def _nodes(self):
-        yield from (nodes for _, nodes, _ in self.pinned)
-        if self.boundary_idx is not None:
-            yield self.boundary_idx
-
-    def _values(self, t, boundary):
-        for times, fn, values in self._kept:
-            if times is t and fn is boundary:
-                return values
-        values = [family.pinned_pressure_each(t[cell]) for family, _, cell in self.pinned]
-        if self.boundary_idx is not None:
-            cols = self._cols()
-            values.append(boundary(t)[np.arange(cols.shape[0])[:, None], cols])
-        if not t.flags.writeable:  # cannot change while kept
-            self._kept = [(t, boundary, values)] + self._kept[:self.KEEP - 1]
+            self._kept = (times[0], boundary, values)
         return values
 
 
@@ -275,7 +257,9 @@ class _Rows:
         # the same for three stages' flows at once, family by family stage-major
         self._flow_to_stages = np.concatenate([(to[None, :] + self.size * np.arange(3)[:, None])
                                                .ravel() for to in flow_to])
-        self._stage_buffers = None  # (3, n) pressures and rates, made on first use
+        # (3, n) pressures and rates of three stages, and the unknowns' flat positions
+        self._stage_buffers = (np.tile(dae._p, (3, 1)), np.zeros((3, dae._p.size)))
+        self._stage_idx = dae._p.size * np.arange(3)[:, None, None] + self.idx[None]
         pinned = []
         for family, nodes, cell in batch._pinned:
             inst = np.flatnonzero(self.holds[cell])
@@ -284,7 +268,7 @@ class _Rows:
                     type(family)([family.specs[i] for i in inst], family.context)
                 pinned.append((sub, nodes[inst], np.searchsorted(rows, cell[inst])))
         self._inputs = _Inputs(pinned, self.boundary_idx if nb else None,
-                               lambda: batch.boundary_cols[rows])
+                               lambda: batch.boundary_cols[rows], dae._p.size)
 
     def evaluate(self, t, Y, Yd, jacobian=False):
         """As :meth:`CellBatch.evaluate` for the cells ``rows``: t (m,), Y, Yd (m, k)."""
@@ -313,10 +297,6 @@ class _Rows:
         """As :meth:`CellBatch.evaluate_stages` for the cells ``rows``."""
         batch = self.batch
         m, k, nb = self.rows.size, batch.k, batch.nb
-        if self._stage_buffers is None:
-            n = batch.dae._p.size
-            self._stage_buffers = (np.tile(batch.dae._p, (3, 1)), np.zeros((3, n)))
-            self._stage_idx = n * np.arange(3)[:, None, None] + self.idx[None]
         P, Pdot = self._inputs.fill_stages(batch, self._stage_buffers, self._stage_idx, times,
                                            Y, Yd)
         # the hub (a batch of one) may hold elements that depend on time; cells do not

@@ -377,8 +377,6 @@ def _solve_stages(problem, st, h, inverse, weights, active, count):
     ok = ~active
     iterations = np.zeros(G)
     previous = None
-    residual = np.empty((3, G, k))
-    outflow = np.empty((3,) + st.Q.shape)
     stage_times = [st.t + c * h for c in C]
     for times in stage_times:  # read-only: the problem may keep its inputs at them
         times.flags.writeable = False
@@ -388,8 +386,8 @@ def _solve_stages(problem, st, h, inverse, weights, active, count):
         if stacked is not None:
             residual, outflow = stacked(stage_times, st.Y[None] + Z, rates)
         else:
-            for i in range(3):
-                residual[i], outflow[i] = problem.evaluate(stage_times[i], st.Y + Z[i], rates[i])
+            stages = [problem.evaluate(stage_times[i], st.Y + Z[i], rates[i]) for i in range(3)]
+            residual, outflow = (np.stack(parts) for parts in zip(*stages))
         count.residuals += 3
         delta = _newton_update(inverse, residual)
         scaled = delta * weights[None]
