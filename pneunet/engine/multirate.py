@@ -191,22 +191,18 @@ class _Group:
             mass[0], rate[0] = self._per_hub(self.state.M), self._per_hub(self.state.Q)
             next_sample = np.ones(self.batch.G, dtype=int)
 
-        ends = ([], [])  # in a sweep, every accepted step's system and end: the next one's guide
-
         def on_step(rows, before, after):
             _record(self.times, self.next_out, rows, before, after, self._write, slopes=False)
             if S is not None:
-                ends[0].append(rows)
-                ends[1].append(after[0])
                 _record(S, next_sample, rows, before, after, lambda r, k, m, q: (
                     np.add.at(mass, (k[:, None], cols[r]), m),
                     np.add.at(rate, (k[:, None], cols[r]), q)), mass=True)
-        start = self.state.t.min()
+        # in a sweep, the accepted steps: the next sweep's guide
+        recorder = radau.StepRecorder(self.batch.G, self.state.t.min()) if S is not None else None
         radau.advance(self.batch, self.state, t_end, opts.rtol, opts.atol, self.corners,
-                      on_step, count, self._guide)
-        if ends[0]:
-            self._recorded = radau.StepGuide(self.batch.G, start, np.concatenate(ends[0]),
-                                             np.concatenate(ends[1]))
+                      on_step, count, self._guide, recorder)
+        if recorder is not None:
+            self._recorded = recorder.guide()
         return count, ((mass, rate) if S is not None else None)
 
     def _per_hub(self, per_cell):

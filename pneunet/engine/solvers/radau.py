@@ -8,7 +8,9 @@ all G systems, one (3k, 3k) Newton matrix per system.
 The method is the three-stage Radau IIA collocation method (Hairer & Wanner,
 *Solving ODEs II*, IV.8): L-stable, stiffly accurate, order 5, for index-1 DAEs.
 The stage increments Z_i = Y_i − y_n solve F(t_n + c_i·h, y_n + Z_i, Ẏ_i) = 0 with
-Ẏ = A⁻¹Z/h, by simplified Newton with ∂F/∂y and ∂F/∂ẏ from the start of the step.
+Ẏ = A⁻¹Z/h, by simplified Newton with ∂F/∂y and ∂F/∂ẏ from the start of the step
+(retaking an earlier sweep's steps: from the start of the recorded step, see
+:class:`StepGuide`).
 The local error is Hairer's embedded estimate (order 3)
 
     e = (γ₀⁻¹/h·M + J)⁻¹ · (M·ẏ_n + M·Σ d_i Z_i / h),   M = ∂F/∂ẏ, J = ∂F/∂y,
@@ -127,24 +129,30 @@ class Corners:
 
 
 class StepGuide:
-    """The step ends (s) each system accepted in an earlier integration from the same
-    start (the previous waveform-relaxation sweep of a window), proposed again: a
-    system on that grid retakes a step that passed there instead of the controller's
-    guess, which the error test may reject again.  Every step still passes the error
-    test; only the proposals change."""
+    """The steps each system accepted in an earlier integration from the same start (the
+    previous waveform-relaxation sweep of a window), proposed again: a system on that
+    grid retakes a step that passed there instead of the controller's guess, which the
+    error test may reject again.  Every step still passes the error test; only the
+    proposals change.  The Newton blocks each recorded step started from serve again
+    (:meth:`blocks`): the state differs from the recorded one by the change of the
+    coupling, which simplified Newton tolerates."""
 
-    def __init__(self, G: int, start: float, rows: np.ndarray, ends: np.ndarray):
-        """``rows`` and ``ends``: the systems and step ends of the accepted steps in the
+    def __init__(self, G: int, start: float, rows: np.ndarray, ends: np.ndarray,
+                 jac: np.ndarray, mass: np.ndarray):
+        """``rows``, ``ends``, ``jac`` and ``mass``: the systems, step ends and Newton
+        blocks ∂F/∂y, ∂F/∂ẏ (from the start of each step) of the accepted steps in the
         order they were taken (so each system's ends increase)."""
         order = np.argsort(rows, kind="stable")  # by system, each in time order
         rows, ends = rows[order], ends[order]
-        counts = np.bincount(rows, minlength=G)
-        first = np.concatenate([[0], np.cumsum(counts)[:-1]])
-        self.times = np.full((G, counts.max(initial=0) + 2), np.inf)
+        self.counts = np.bincount(rows, minlength=G)
+        self.first = np.concatenate([[0], np.cumsum(self.counts)[:-1]])
+        self.times = np.full((G, self.counts.max(initial=0) + 2), np.inf)
         self.times[:, 0] = start                  # every system starts on its grid
-        self.times[rows, 1 + np.arange(rows.size) - first[rows]] = ends
+        self.times[rows, 1 + np.arange(rows.size) - self.first[rows]] = ends
+        self.jac, self.mass = jac[order], mass[order]  # step j of system g: first[g] + j
         self.next = np.zeros(G, dtype=int)
         self.refused = np.zeros(G, dtype=bool)   # a proposal failed; not again until a step passes
+        self.fresh_blocks = np.zeros(G, dtype=bool)  # Newton failed: own blocks until a step passes
         self._following = None
 
     def propose(self, t, h_controller, h, limit, rows):
@@ -161,11 +169,43 @@ class StepGuide:
         self._following = follow
         return np.where(follow, ahead, h)
 
-    def settle(self, rows, active, accepted):
+    def blocks(self, rows, active):
+        """After :meth:`propose`: for the systems ``rows``, the Newton blocks (jac, mass)
+        of the recorded step each one's time lies in (the one starting there on the
+        grid), or None when some ``active`` system has none or failed Newton since its
+        last accepted step."""
+        step = self.next[rows] - 1
+        if np.any(step[active] >= self.counts[rows[active]]) or \
+                np.any(self.fresh_blocks[rows[active]]):
+            return None
+        at = self.first[rows] + np.minimum(step, self.counts[rows] - 1)
+        return self.jac[at], self.mass[at]
+
+    def settle(self, rows, active, converged, accepted):
         """After the attempt: the systems ``rows`` whose proposal failed stop following
-        until they pass a step of the controller's."""
+        until they pass a step of the controller's; those whose Newton iteration did not
+        converge take no recorded blocks until they pass a step."""
         self.refused[rows[active & self._following & ~accepted]] = True
         self.refused[rows[accepted & ~self._following]] = False
+        self.fresh_blocks[rows[active & ~converged]] = True
+        self.fresh_blocks[rows[accepted]] = False
+
+
+class StepRecorder:
+    """The accepted steps of an integration from ``start`` (s) and the Newton blocks
+    each started from, for the :class:`StepGuide` of the next integration from there."""
+
+    def __init__(self, G: int, start: float):
+        self.G, self.start = G, start
+        self._parts = []
+
+    def add(self, rows, ends, jac, mass):
+        self._parts.append((rows, ends, jac, mass))
+
+    def guide(self) -> StepGuide | None:
+        if not self._parts:
+            return None
+        return StepGuide(self.G, self.start, *map(np.concatenate, zip(*self._parts)))
 
 
 def _upcoming(times, nxt, t, rows):
@@ -199,9 +239,10 @@ def start(problem, t0: float, Y: np.ndarray, span: float, rtol: float, atol: flo
 
 def advance(problem, st: BatchState, t_end: float, rtol: float, atol: float,
             corners: Corners | None = None, on_step=None, count: Counters | None = None,
-            guide: StepGuide | None = None):
+            guide: StepGuide | None = None, recorder: StepRecorder | None = None):
     """Step every system of ``st`` to ``t_end`` (s), landing on its corners, with the
-    step proposals of ``guide`` where given.
+    step proposals and Newton blocks of ``guide`` where given; ``recorder`` keeps the
+    accepted steps.
 
     ``on_step(rows, before, after)`` is called after each pass with the systems that
     took a step and their (t, Y, Yd, Q, M) before and after it.  A problem with a
@@ -221,16 +262,16 @@ def advance(problem, st: BatchState, t_end: float, rtol: float, atol: float,
         rows, view = subset(np.flatnonzero(active)) if subset is not None else (None, None)
         if rows is None:
             _pass(problem, st, everyone, active, t_end, tiny, rtol, atol, corners, on_step, count,
-                  guide)
+                  guide, recorder)
         else:
             part = st.take(rows)
             _pass(view, part, rows, active[rows], t_end, tiny, rtol, atol, corners, on_step,
-                  count, guide)
+                  count, guide, recorder)
             st.put(rows, part)
 
 
 def _pass(problem, st, systems, active, t_end, tiny, rtol, atol, corners, on_step, count,
-          guide=None):
+          guide=None, recorder=None):
     """One step attempt of the ``active`` systems of ``st``; ``systems`` are their
     indices in the whole batch (corners, callbacks and messages use those)."""
     G = st.Y.shape[0]
@@ -244,8 +285,12 @@ def _pass(problem, st, systems, active, t_end, tiny, rtol, atol, corners, on_ste
     h = np.where(active, h, 1.0)
     _check_step(problem, st, active, h, systems)
     weights = 1.0 / (rtol * np.abs(st.Y) + atol)
-    _, _, jac, mass = problem.evaluate(st.t, st.Y, st.Yd, jacobian=True)
-    count.jacobians += 1
+    blocks = guide.blocks(systems, active) if guide is not None else None
+    if blocks is None:
+        _, _, jac, mass = problem.evaluate(st.t, st.Y, st.Yd, jacobian=True)
+        count.jacobians += 1
+    else:
+        jac, mass = blocks
     newton = _newton_matrices(jac, mass, h, active)
     Z, Yd_stages, Q_stages, ok, iterations = _solve_stages(problem, st, h, newton, weights,
                                                            active, count)
@@ -253,7 +298,7 @@ def _pass(problem, st, systems, active, t_end, tiny, rtol, atol, corners, on_ste
     err = _norm(error, weights, problem.differential)
     accepted = active & ok & (err <= 1.0)
     if guide is not None:
-        guide.settle(systems, active, accepted)
+        guide.settle(systems, active, ok, accepted)
     new_h = _next_step(st, h, err, iterations, accepted)
     # Newton failed: at least halve, more when the (unconverged) error says so — a
     # step across a kink of the flow laws then takes fewer attempts
@@ -276,6 +321,8 @@ def _pass(problem, st, systems, active, t_end, tiny, rtol, atol, corners, on_ste
     before = (st.t[rows], st.Y[rows], st.Yd[rows], st.Q[rows], st.M[rows])
     t_new = st.t[rows] + h[rows]
     st.t[rows] = np.where(np.abs(t_new - target[rows]) <= tiny, target[rows], t_new)
+    if recorder is not None:
+        recorder.add(systems[rows], st.t[rows], jac[rows], mass[rows])
     st.M[rows] += h[rows][:, None] * (B[0] * Q_stages[0, rows] + B[1] * Q_stages[1, rows]
                                        + B[2] * Q_stages[2, rows])
     st.Y[rows] += Z[2, rows]
