@@ -142,14 +142,15 @@ class StepGuide:
         """``rows``, ``ends``, ``jac`` and ``mass``: the systems, step ends and Newton
         blocks ∂F/∂y, ∂F/∂ẏ (from the start of each step) of the accepted steps in the
         order they were taken (so each system's ends increase)."""
-        order = np.argsort(rows, kind="stable")  # by system, each in time order
-        rows, ends = rows[order], ends[order]
+        # step j of system g: entry order[first[g] + j] of the arrays as given
+        self.order = np.argsort(rows, kind="stable")  # by system, each in time order
+        rows = rows[self.order]
         self.counts = np.bincount(rows, minlength=G)
         self.first = np.concatenate([[0], np.cumsum(self.counts)[:-1]])
         self.times = np.full((G, self.counts.max(initial=0) + 2), np.inf)
         self.times[:, 0] = start                  # every system starts on its grid
-        self.times[rows, 1 + np.arange(rows.size) - self.first[rows]] = ends
-        self.jac, self.mass = jac[order], mass[order]  # step j of system g: first[g] + j
+        self.times[rows, 1 + np.arange(rows.size) - self.first[rows]] = ends[self.order]
+        self.jac, self.mass = jac, mass
         self.next = np.zeros(G, dtype=int)
         self.refused = np.zeros(G, dtype=bool)   # a proposal failed; not again until a step passes
         self.fresh_blocks = np.zeros(G, dtype=bool)  # Newton failed: own blocks until a step passes
@@ -174,11 +175,10 @@ class StepGuide:
         of the recorded step each one's time lies in (the one starting there on the
         grid), or None when some ``active`` system has none or failed Newton since its
         last accepted step."""
-        step = self.next[rows] - 1
-        if np.any(step[active] >= self.counts[rows[active]]) or \
-                np.any(self.fresh_blocks[rows[active]]):
+        step, counts = self.next[rows] - 1, self.counts[rows]
+        if np.any(active & ((step >= counts) | self.fresh_blocks[rows])):
             return None
-        at = self.first[rows] + np.minimum(step, self.counts[rows] - 1)
+        at = self.order[self.first[rows] + np.minimum(step, counts - 1)]
         return self.jac[at], self.mass[at]
 
     def settle(self, rows, active, converged, accepted):
