@@ -317,6 +317,28 @@ def test_anderson_mixing_solves_a_linear_coupling_with_a_low_rank_error_in_few_s
     assert np.abs(plain - fixed).max() > 1.0     # what the sweeps would be without it
 
 
+def test_the_secant_slope_is_the_least_squares_ratio_of_draw_to_pressure_changes():
+    """Two sweeps of a window on three hub nodes: the cells' draw grows by 40 and by
+    7 mg/(s·kPa) (plus a pressure-independent part and noise) where the hub pressure
+    changed, and not at all on a node whose pressure did not change; a draw that falls
+    with the pressure is no sensitivity to correct with."""
+    from pneunet.engine.multirate import _secant_slope
+
+    rng = np.random.default_rng(3)
+    seen = 480 + rng.normal(0, 2, (33, 3))
+    moved = seen + np.column_stack([rng.normal(0, 0.5, 33), rng.normal(0, 0.5, 33), np.zeros(33)])
+    base = rng.uniform(100, 200, (33, 3))
+    noise = rng.normal(0, 1e-3, (33, 3))
+    drawn = base + np.array([40.0, -7.0, 3.0]) * (seen - 480)
+    drawn_moved = base + np.array([40.0, -7.0, 3.0]) * (moved - 480) + noise
+    slope = _secant_slope((seen, drawn), (moved, drawn_moved))
+    dp = moved[:, 0] - seen[:, 0]
+    expected = np.sum((drawn_moved[:, 0] - drawn[:, 0]) * dp) / np.sum(dp * dp)
+    assert slope[0] == pytest.approx(expected, rel=1e-12)
+    assert slope[0] == pytest.approx(40.0, rel=1e-3)
+    assert np.isnan(slope[1]) and np.isnan(slope[2])
+
+
 # -- 4. independent oscillators: folds inside cells -----------------------------------------
 OSC_VOLUMES = [100 + 20 * i for i in range(6)]   # periods 3.0–5.9 s
 OSCILLATORS = """* six oscillators of different tanks on one ideal supply
