@@ -21,8 +21,9 @@ cell only.  Cells and hub are coupled by windowed waveform relaxation:
    and so does a rerun of the hub with the cells' draw alone (so that the hub loses
    exactly what the cells gain), the window is accepted; else steps 2–4 repeat with
    the new samples; after :data:`MAX_SWEEPS` the window is halved.  H grows while
-   one or two sweeps suffice.  A sweep after one that moved the samples by at most
-   :data:`EXACT_HUB_WITHIN` acceptances runs that rerun's hub (without the slope) alone.
+   one or two sweeps suffice.  A sweep whose change is predicted acceptable (the last
+   change times the ratio of the last two, :data:`FIRST_CONTRACTION` before there are
+   two) runs that rerun's hub (without the slope) alone.
 
 Every cell meets IDA's local error test in IDA's norm; the coupling error is
 bounded by the same tolerance at every sample.  Cells with algebraic nodes and no
@@ -55,7 +56,8 @@ FIRST_WINDOW = 1 / 200     # of the span: the start is the least settled; window
 MAX_SWEEPS = 6             # waveform-relaxation sweeps before a window is halved
 ANDERSON_DEPTH = 3         # earlier sweeps the next hub samples are mixed from
 COUPLING_TOL = 30          # accepted hub-sample change between sweeps, in local tolerances
-EXACT_HUB_WITHIN = 10      # after a change of at most this many COUPLING_TOL: hub without slope
+FIRST_CONTRACTION = 0.1    # change of the samples per sweep, until one has been measured
+MIN_CONTRACTION = 1e-3     # the least that a measured one counts for
 DEFAULT_OUTPUTS = 1000     # output points when the .tran gives no step
 PARALLEL_WORKERS = 2
 PARALLEL_MIN_CELLS = 8     # independent cells from which they run in worker processes
@@ -381,6 +383,7 @@ def _relax(groups, hub, t_start, t_stop, opts, count, done) -> dict:
     T, H = t_start, FIRST_WINDOW * (t_stop - t_start)
     windows = sweeps = halvings = 0
     secant = None  # the draw's sensitivity to the hub pressure the last two sweeps showed
+    contraction = FIRST_CONTRACTION  # the change's ratio over the last two sweeps
     worst = 0.0
     while T < t_stop - 1e-12 * max(1.0, abs(t_stop)):
         H = min(H, t_stop - T)
@@ -411,14 +414,16 @@ def _relax(groups, hub, t_start, t_stop, opts, count, done) -> dict:
             if last is not None:
                 secant = _secant_slope(last, (p[0], rate))
             last = p[0], rate
-            # once the last sweep moved the samples by at most EXACT_HUB_WITHIN acceptances,
-            # this one is likely accepted: run the only hub that may be (on the cells'
-            # draw alone, no slope) instead of the slope's, which would be run again
-            exact = change <= EXACT_HUB_WITHIN * COUPLING_TOL
+            # when the last change times the last measured contraction is acceptable, this
+            # sweep is likely accepted: run the only hub that may be (on the cells' draw
+            # alone, no slope) instead of the slope's, which would be run again
+            exact = change * contraction <= COUPLING_TOL
             hub.restore(saved_hub)
             new = hub.advance(S, land, (mass, rate), p, no_slope if exact else slope, opts,
                               count)
-            change = _change(new, p, opts)
+            previous, change = change, _change(new, p, opts)
+            if np.isfinite(previous):
+                contraction = max(change / previous, MIN_CONTRACTION)
             if change <= COUPLING_TOL and not exact:
                 hub.restore(saved_hub)
                 new = hub.advance(S, land, (mass, rate), p, no_slope, opts, count)
