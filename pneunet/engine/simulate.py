@@ -132,13 +132,13 @@ def _partition_for(circuit, dae, backend, span):
     if method == "single" or method == "auto" and (backend is not None
                                                    or dae.n < AUTO_MIN_CELLS):
         return None
-    scheduled = dae.n >= AUTO_MULTIRATE_UNKNOWNS and \
-        _schedules(dae, *span) >= AUTO_MULTIRATE_SCHEDULES
     part = partition(circuit)
     algebraic = {dae.node_names[i] for i in dae.algebraic_idx}
     if method == "auto":
         if worth_partitioning(part, algebraic):
             return None
+        scheduled = dae.n >= AUTO_MULTIRATE_UNKNOWNS and \
+            _schedules(dae, *span) >= AUTO_MULTIRATE_SCHEDULES
         if scheduled or part.read_only_hub and \
                 _drives(dae, part, span) >= AUTO_MULTIRATE_SCHEDULES:
             return part
