@@ -128,11 +128,11 @@ class CellBatch:
     def evaluate_stages(self, times, Y, Yd):
         """R (3, G, k) and boundary outflows (3, G, nb) at the three stage times ``times``
         (three (G,) arrays) with Y, Yd (3, G, k): one evaluation of each family for all
-        three (:meth:`_Rows.evaluate_stages`), plus the injection stage by stage."""
+        three (:meth:`_Rows.evaluate_stages`), and of the injection at the 3·G times."""
         res, out = self._whole.evaluate_stages(times, Y, Yd)
         if self.injection is not None:
-            for stage, (t, y) in enumerate(zip(times, Y)):
-                res[stage] += self.injection(t, y)[0]
+            res += self.injection(np.concatenate(times), Y.reshape(-1, self.k))[0] \
+                .reshape(res.shape)
         return res, out
 
     def rows(self, active: np.ndarray):

@@ -299,9 +299,10 @@ class _Hub:
                                  opts.rtol, opts.atol)
 
     def _injection(self, t, Y):
-        """The cells' draw at times t (1,), corrected by its slope for the difference
-        between the hub's pressure and the one the cells saw."""
-        key = float(t[0])  # a pass evaluates each of its stage times several times
+        """The cells' draw at times t (one, or a pass's three stage times), corrected by
+        its slope for the difference between the hub's pressure and the one the cells
+        saw."""
+        key = (float(t[0]), t.size)  # a pass evaluates its stage times several times
         if key not in self._inputs:
             if len(self._inputs) > 16:
                 self._inputs.clear()
