@@ -5,26 +5,15 @@ import numpy as np
 
 from pneunet.engine.solvers import radau
 
+from .relaxation import ForcedRelaxation
 
-class KinkedRelaxation:
+
+class KinkedRelaxation(ForcedRelaxation):
     """G scalar systems ẏ = −λ_g·(y − |sin(3t)|): each follows a rectified sine with its
     own rate, so the step-size controller meets a kink every π/3 s and rejects steps."""
 
     def __init__(self, rates):
-        self.lam = np.asarray(rates, dtype=float)
-        self.differential = np.array([True])
-        self.names = [[f"y{g}"] for g in range(self.lam.size)]
-
-    def evaluate(self, t, Y, Yd, jacobian=False):
-        res = Yd + self.lam[:, None] * (Y - np.abs(np.sin(3.0 * t))[:, None])
-        out = np.zeros((Y.shape[0], 0))
-        if not jacobian:
-            return res, out
-        G = Y.shape[0]
-        return res, out, self.lam.reshape(G, 1, 1).copy(), np.ones((G, 1, 1))
-
-    def rates(self, t, Y, Yd_guess):
-        return -self.lam[:, None] * (Y - np.abs(np.sin(3.0 * t))[:, None])
+        super().__init__(rates, lambda t: self.lam * np.abs(np.sin(3.0 * t)))
 
 
 class StiffeningRelaxation(KinkedRelaxation):

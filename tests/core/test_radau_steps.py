@@ -7,29 +7,16 @@ from scipy.integrate import quad
 
 from pneunet.engine.solvers import radau
 
+from .relaxation import ForcedRelaxation
 
-class RootRamp:
+
+class RootRamp(ForcedRelaxation):
     """G scalar systems ẏ = −λ_g·y + A·√max(t − t0, 0): the forcing starts at t0 with an
     infinite slope, so the error of a step from t0 falls about as h^1.5, not h^4."""
 
     def __init__(self, rates, t0=0.3, amplitude=50.0):
-        self.lam, self.t0, self.amplitude = np.asarray(rates, dtype=float), t0, amplitude
-        self.differential = np.array([True])
-        self.names = [[f"y{g}"] for g in range(self.lam.size)]
-
-    def forcing(self, t):
-        return self.amplitude * np.sqrt(np.maximum(t - self.t0, 0.0))
-
-    def evaluate(self, t, Y, Yd, jacobian=False):
-        res = Yd + self.lam[:, None] * Y - self.forcing(t)[:, None]
-        out = np.zeros((Y.shape[0], 0))
-        if not jacobian:
-            return res, out
-        G = Y.shape[0]
-        return res, out, self.lam.reshape(G, 1, 1).copy(), np.ones((G, 1, 1))
-
-    def rates(self, t, Y, Yd_guess):
-        return -self.lam[:, None] * Y + self.forcing(t)[:, None]
+        super().__init__(rates, lambda t: amplitude * np.sqrt(np.maximum(t - t0, 0.0)))
+        self.t0, self.amplitude = t0, amplitude
 
     def exact(self, g, t):
         """y_g(t) from y(0) = 0: A·∫ e^(−λ(t−s))·√(s − t0) ds over [t0, t]."""
