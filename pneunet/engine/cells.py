@@ -35,9 +35,11 @@ class CellBatch:
     ``boundary(t) -> (G, c)`` gives hub pressures at the cells' times t (G,), of which
     cell g's boundary node j reads column ``boundary_cols[g, j]`` (default j: the
     boundary nodes in order; cells of one structure may sit on different hub nodes);
-    ``injection(t, Y) -> (flows, slopes)`` adds flows (G, k)
+    ``injection(t, Y) -> (flows, slopes)`` adds flows (n, k)
     (mg/s) leaving each unknown node (the hub's cells) and their derivatives by the
-    node's own pressure (G, k), mg/(s·kPa).  Either may be None.
+    node's own pressure (n, k), mg/(s·kPa), at the times t (n,) for the states Y (n, k):
+    the G cells' times, or a pass's three stage times of each (n = 3·G).  Either may be
+    None.
     """
 
     def __init__(self, circuit, cells, hub_nodes=(), title="cells"):

@@ -287,7 +287,7 @@ class _Hub:
         self.y0, self.t_start = y0[self.cols][None, :], t_start
         self.batch.injection = self._injection
         self._draw = self._seen = None
-        self._inputs = {}  # time (s) → (draw, seen pressures) at it
+        self._inputs = {}  # (first time (s), count) → (draw, seen pressures) at those times
         self.slope = None  # (1, n_hub) mg/(s·kPa); None: the draw alone
         self.state = None
 

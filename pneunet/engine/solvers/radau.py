@@ -156,7 +156,7 @@ class StepGuide:
         self.jac, self.mass = jac, mass
         self.next = np.zeros(G, dtype=int)
         self.refused = np.zeros(G, dtype=bool)   # a proposal failed; not again until a step passes
-        self.fresh_blocks = np.zeros(G, dtype=bool)  # Newton failed: own blocks until a step passes
+        self.needs_own_blocks = np.zeros(G, dtype=bool)  # Newton failed: until a step passes
         self._following = None
 
     def propose(self, t, h_controller, h, limit, rows):
@@ -179,7 +179,7 @@ class StepGuide:
         grid), or None when some ``active`` system has none or failed Newton since its
         last accepted step."""
         step, counts = self.next[rows] - 1, self.counts[rows]
-        if np.any(active & ((step >= counts) | self.fresh_blocks[rows])):
+        if np.any(active & ((step >= counts) | self.needs_own_blocks[rows])):
             return None
         at = self.order[self.first[rows] + np.minimum(step, counts - 1)]
         return self.jac[at], self.mass[at]
@@ -190,8 +190,8 @@ class StepGuide:
         converge take no recorded blocks until they pass a step."""
         self.refused[rows[active & self._following & ~accepted]] = True
         self.refused[rows[accepted & ~self._following]] = False
-        self.fresh_blocks[rows[active & ~converged]] = True
-        self.fresh_blocks[rows[accepted]] = False
+        self.needs_own_blocks[rows[active & ~converged]] = True
+        self.needs_own_blocks[rows[accepted]] = False
 
 
 class StepRecorder:
@@ -203,9 +203,12 @@ class StepRecorder:
         self._parts = []
 
     def add(self, rows, ends, jac, mass):
+        """The systems ``rows`` accepted steps ending at ``ends`` (s) from the blocks
+        ``jac``, ``mass`` (len(rows), k, k)."""
         self._parts.append((rows, ends, jac, mass))
 
     def guide(self) -> StepGuide | None:
+        """The guide for the next integration from ``start`` (None: no step taken)."""
         if not self._parts:
             return None
         return StepGuide(self.G, self.start, *map(np.concatenate, zip(*self._parts)))
