@@ -22,6 +22,22 @@ def brute_force_period(path, rvent, pclose):
     return measure.period(sol.t, sol.pressure("tank"), t_from=7.0)
 
 
+def wilson_textbook(k, n, z=1.959963984540054):
+    """The 95 % Wilson score interval of k successes in n trials (Wilson 1927):
+    (p + z²/2n ± z·√(p(1−p)/n + z²/4n²)) / (1 + z²/n)."""
+    p = k / n
+    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
+    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
+    return centre - half, centre + half
+
+
+@pytest.mark.parametrize("k, n", [(0, 10), (3, 12), (10, 20), (97, 100), (200, 200)])
+def test_wilson_interval_is_the_95_percent_score_interval(k, n):
+    from pneunet.design.yields import wilson
+
+    assert wilson(k, n) == pytest.approx(wilson_textbook(k, n), abs=1e-12)
+
+
 def test_yield_equals_brute_force_of_the_same_samples(short_oscillator, tmp_path, capsys):
     n, seed = 12, 3
     samples = tmp_path / "samples.csv"
@@ -43,8 +59,7 @@ def test_yield_equals_brute_force_of_the_same_samples(short_oscillator, tmp_path
     p = passed / n
     assert out["yield"] == pytest.approx(p)
     assert out["se"] == pytest.approx(math.sqrt(p * (1 - p) / n))
-    lo, hi = out["interval95"]
-    assert lo < p < hi
+    assert out["interval95"] == pytest.approx(wilson_textbook(passed, n), abs=1e-12)
     assert out["most_important"] == {"period": "X1.pclose"}
     assert out["limiting_parameter"] == {"parameter": "X1.pclose", "metric": "period"}
     # p_close's effect of one SD (10/√12 kPa): the derivative by brute force, and the

@@ -1,0 +1,38 @@
+"""Verdicts just inside and just outside their tolerance (issue 39): a held-out error of
+1.4 × the noise floor is "at the floor", 1.6 × is not (docs/diagnose.md: within 1.5 ×).
+Every call uses the default tolerance, the one the valve and circuit diagnoses use."""
+import pytest
+
+from pneunet.truth import Step, decide, verdict
+from pneunet.truth.verdict import at_floor
+
+FLOOR = 2.0  # any unit
+
+
+@pytest.mark.parametrize("factor, at", [(1.4, True), (1.6, False)])
+def test_at_floor_just_inside_and_just_outside(factor, at):
+    assert at_floor(factor * FLOOR, FLOOR) is at
+
+
+@pytest.mark.parametrize("factor, word", [(1.4, "adequate"), (1.6, "unexplained")])
+def test_base_model_alone(factor, word):
+    assert verdict(factor * FLOOR, factor * FLOOR, FLOOR, accepted=[]) == word
+
+
+@pytest.mark.parametrize("factor, word", [(1.4, "explained"), (1.6, "unexplained")])
+def test_accepted_effect_must_reach_the_floor(factor, word):
+    assert verdict(5.0 * FLOOR, factor * FLOOR, FLOOR, accepted=["leak"]) == word
+
+
+@pytest.mark.parametrize("factor, word, accepted", [(1.4, "explained", ["leak"]),
+                                                   (1.6, "unexplained", [])])
+def test_waterfall_accepts_the_first_step_at_the_floor(factor, word, accepted):
+    steps = [Step("base", 4.0 * FLOOR), Step("+leak", factor * FLOOR, effects=("leak",))]
+    assert decide(steps, FLOOR) == (word, accepted)
+
+
+@pytest.mark.parametrize("factor, word", [(1.4, "adequate"), (1.6, "unexplained")])
+def test_waterfall_base_at_the_floor_claims_nothing(factor, word):
+    steps = [Step("base", factor * FLOOR), Step("+leak", 1.0 * FLOOR, effects=("leak",))]
+    want = (word, []) if word == "adequate" else ("explained", ["leak"])
+    assert decide(steps, FLOOR) == want
