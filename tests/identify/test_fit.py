@@ -53,6 +53,23 @@ def test_round_trip_intervals_hold_the_truth(round_trips):
     assert sum(len(v) for v in per_param.values()) <= 16, per_param
 
 
+def test_round_trip_intervals_are_not_too_wide(round_trips):
+    """The other bound (issue 39): the 95 % intervals are as wide as the estimates'
+    errors, not wider.  Over the same 108 checks, the errors in units of the interval's
+    standard error (half-width ÷ 1.96) have an rms of 1.18 (honest: 1 ± 0.07) and 13
+    fall outside ±1.96; intervals 1.8× too wide would give an rms of ~0.65 and no miss."""
+    z = []
+    for name in VALVES:
+        truth = PAPER_VALVES[name]
+        for fit in round_trips(name, mdot_min="auto").values():
+            z += [(getattr(fit.params, k) - getattr(truth, k))
+                  / ((fit.ci95[k][1] - fit.ci95[k][0]) / 2 / 1.959963984540054) for k in NAMES]
+    z = np.array(z)
+    assert len(z) == 108
+    assert 0.8 <= np.sqrt(np.mean(z ** 2)) <= 1.4, np.sqrt(np.mean(z ** 2))
+    assert (np.abs(z) > 1.959963984540054).sum() >= 2  # coverage below 98 %
+
+
 def test_paper_threshold_fixed_at_one_mg_s(round_trips):
     """With the paper's defaults (ṁ_min 1 mg/s, C 0.1) the same criteria hold for axi."""
     truth = PAPER_VALVES["axi"]
