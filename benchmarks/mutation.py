@@ -1,0 +1,112 @@
+"""Mutation testing of the core modules with cosmic-ray (issue 39).
+
+Each module is mutated in a throw-away clone of the committed repository (never in the
+working tree) and every mutant is run against the module's fast tests only (seconds a
+mutant); a mutant the tests do not fail "survives".  Results: per module the killed
+fraction and the survivors (file, line, operator), kept in benchmarks/README.md with a
+reason for each one left.
+
+Run:  pip install '.[mutation]'
+      python benchmarks/mutation.py                      # the modules run so far
+      python benchmarks/mutation.py verdict laws --keep /tmp/mut   # chosen ones, keep the clone
+
+Operators: cosmic-ray's core set minus the binary-operator replacements by >>, <<, |, &,
+^, // and % (on float arrays they raise at once or are never plausible slips; they cost a
+test run each).  One test run per mutant, one process: the machine's cores are shared.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+PYTEST = "python -m pytest -x -q -n 0 -p no:cacheprovider"
+
+#: module → (path, fast tests that guard it)
+MODULES = {
+    "verdict": ("pneunet/truth/verdict.py",
+                "tests/diagnose/test_verdict_threshold.py"),
+    "intervals": ("pneunet/truth/intervals.py",
+                  "tests/diagnose/test_interval_coverage.py"),
+    "laws": ("pneunet/laws.py",
+             "tests/core/test_valve_law_reference.py tests/core/test_scalar_laws.py "
+             "tests/core/test_element_conformance.py"),
+    "noise": ("pneunet/truth/noise.py", "tests/diagnose tests/traces -k noise"),
+    "includes": ("pneunet/netlist/includes.py", "tests/netlist/test_includes.py"),
+    "assembly": ("pneunet/engine/assembly.py",
+                 "tests/core/test_element_conformance.py tests/core/test_topology_and_errors.py"),
+    "valves": ("pneunet/elements/valves.py",
+               "tests/core/test_valve_law_reference.py tests/core/test_scalar_laws.py "
+               "tests/core/test_element_conformance.py -k valve"),
+}
+DEFAULT = ("verdict", "intervals", "laws")
+EXCLUDED = [r"core/ReplaceBinaryOperator_.*_(RShift|LShift|BitOr|BitAnd|BitXor|FloorDiv|Mod)$"]
+
+
+def config(path: str, tests: str, timeout: float) -> str:
+    return "\n".join([
+        "[cosmic-ray]",
+        f'module-path = "{path}"',
+        f"timeout = {timeout}",
+        "excluded-modules = []",
+        f'test-command = "{PYTEST} {tests}"',
+        "",
+        "[cosmic-ray.distributor]",
+        'name = "local"',
+        "",
+        "[cosmic-ray.filters.operators-filter]",
+        "exclude-operators = [" + ", ".join(f"'{e}'" for e in EXCLUDED) + "]",
+        ""])
+
+
+def run(cmd, cwd, **kw):
+    return subprocess.run(cmd, cwd=cwd, check=True, text=True, **kw)
+
+
+def mutate(name: str, work: Path, timeout: float) -> dict:
+    path, tests = MODULES[name]
+    cfg, session = work / f"{name}.toml", work / f"{name}.sqlite"
+    cfg.write_text(config(path, tests, timeout))
+    start = time.perf_counter()
+    run(["cosmic-ray", "init", str(cfg), str(session)], work)
+    run(["cr-filter-operators", str(session), str(cfg)], work)
+    run(["cosmic-ray", "baseline", str(cfg)], work)  # the tests pass unmutated
+    run(["cosmic-ray", "exec", str(cfg), str(session)], work)
+    dump = run(["cosmic-ray", "dump", str(session)], work, capture_output=True).stdout
+    jobs = [json.loads(line) for line in dump.splitlines() if line.strip()]
+    done = [(w, r) for w, r in jobs if r is not None and r.get("test_outcome")]
+    skipped = [w for w, r in jobs if r is not None and r.get("worker_outcome") == "skipped"]
+    survivors = [(m["module_path"], m["start_pos"][0], m["operator_name"], m["occurrence"])
+                 for w, r in done for m in w["mutations"] if r["test_outcome"] == "survived"]
+    killed = sum(r["test_outcome"] != "survived" for _, r in done)
+    return {"module": path, "mutants": len(done), "killed": killed, "skipped": len(skipped),
+            "score": killed / len(done) if done else float("nan"), "survivors": survivors,
+            "minutes": (time.perf_counter() - start) / 60}
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("modules", nargs="*", default=list(DEFAULT), choices=sorted(MODULES))
+    ap.add_argument("--timeout", type=float, default=60.0, help="seconds per mutant's tests")
+    ap.add_argument("--keep", type=Path, help="clone here and keep it (default: a temp dir)")
+    args = ap.parse_args(argv)
+    with tempfile.TemporaryDirectory() as tmp:
+        work = args.keep or Path(tmp) / "pneunet"
+        if not work.exists():
+            run(["git", "clone", "-q", "--local", str(ROOT), str(work)], ROOT)
+        for name in args.modules:
+            out = mutate(name, work, args.timeout)
+            print(f"{name}: {out['killed']}/{out['mutants']} killed "
+                  f"({100 * out['score']:.1f} %), {out['minutes']:.1f} min", flush=True)
+            for path, line, op, occ in out["survivors"]:
+                print(f"  survived: {path}:{line} {op} #{occ}", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
