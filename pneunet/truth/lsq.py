@@ -7,6 +7,7 @@ pool (``pool``; 2 workers on a 2-core machine halve the wall time of a Jacobian)
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -36,20 +37,27 @@ def evaluate_many(fun, xs, pool=None) -> list:
 
 #: fresh starts of LM after it stepped past a bound (each with that parameter held there)
 RESTARTS = 2
+#: MINPACK's relative step tolerance, applied to ln x shifted by a constant (see
+#: :func:`least_squares_log`): small, so that the shift keeps the sums exact
+_MINPACK_XTOL = 1e-8
 
 
 def least_squares_log(fun, x0, lb, ub, *, max_nfev: int = 40, diff_step: float = 1e-3,
-                      pool=None, xtol: float = 1e-4, ftol: float = 1e-6) -> LsqResult:
+                      pool=None, xtol: float = 5e-4, ftol: float = 1e-6) -> LsqResult:
     """Levenberg–Marquardt on ``fun(x)`` (x: ln-parameters in [lb, ub]) with forward
     differences of step ``diff_step`` (backwards at an upper bound).
 
     LM knows no bounds: a step past one is clipped, and LM starts again (at most
     :data:`RESTARTS` times) with that parameter held at its bound and the others free.
     ``max_nfev`` caps the simulations, Jacobian columns included; no point is simulated
-    twice.  The Jacobian returned has a column for every parameter.  LM stops when a
-    step changes ln x by less than ``xtol``·‖ln x‖ (1e-4: ~0.05 % of a parameter, far
-    inside any interval a recording gives: 1e-5 cost the 3-parameter oscillator fit a
-    quarter more simulations and moved no estimate by 0.01 standard errors)."""
+    twice.  The Jacobian returned has a column for every parameter.
+
+    LM stops when its trust region falls below ``xtol`` in ln x (5e-4: 0.05 % of every
+    parameter, far inside any interval a recording gives) or a step lowers the cost by
+    less than ``ftol`` relatively.  MINPACK's own test, radius < xtol·‖x‖, depends on
+    the units a parameter is written in (ln x = 0 for a value of exactly 1 in its unit,
+    and the first radius is 100·‖x‖): LM runs on u = ln x + K, a shift that changes no
+    step, with K·√n·1e-8 = ``xtol``."""
     from scipy import optimize
 
     lb, ub = np.asarray(lb, float), np.asarray(ub, float)
@@ -90,14 +98,16 @@ def least_squares_log(fun, x0, lb, ub, *, max_nfev: int = 40, diff_step: float =
             return full
 
         left = max_nfev - count["n"]
-        res = optimize.least_squares(lambda z: f(at(z)), x[idx],
-                                     jac=lambda z, idx=idx: jacobian(at(z), idx), method="lm",
-                                     max_nfev=max(2, left // (idx.size + 1)), xtol=xtol,
-                                     ftol=ftol)
-        x = at(res.x)
+        shift = xtol / (_MINPACK_XTOL * math.sqrt(idx.size))
+        res = optimize.least_squares(lambda u: f(at(u - shift)), x[idx] + shift,
+                                     jac=lambda u, idx=idx: jacobian(at(u - shift), idx),
+                                     method="lm", max_nfev=max(2, left // (idx.size + 1)),
+                                     xtol=_MINPACK_XTOL, ftol=ftol)
+        z = res.x - shift
+        x = at(z)
         # LM walked past a bound, where the clipped residual is flat: hold it there;
         # release a held parameter whose gradient points back into the box
-        hold = idx[x[idx] != res.x]
+        hold = idx[x[idx] != z]
         if max_nfev - count["n"] < 2 * (len(x) + 1):
             break
         g = jacobian(x, range(len(x))).T @ f(x)

@@ -64,3 +64,44 @@ def test_a_step_past_a_bound_is_released_when_the_optimum_is_inside():
     x0 = np.log([1.0, 0.05])
     res = least_squares_log(fun, x0, lb, ub, max_nfev=80, diff_step=1e-4)
     np.testing.assert_allclose(np.exp(res.x), np.exp(_reference(lb, ub, x0)), rtol=1e-3)
+
+
+class WithBaseline:
+    """Residual of y = a·exp(−b·t) + c with the model seeing ``unit``·exp(x), data from
+    (a, b, c) = (2.0, 0.7, 1.0)."""
+
+    TRUE = np.array([2.0, 0.7, 1.0])
+
+    def __init__(self, unit=(1.0, 1.0, 1.0)):
+        self.unit = np.asarray(unit, float)
+        self.data = self.model(np.log(self.TRUE / self.unit)) + NOISE
+
+    def model(self, x):
+        a, b, c = self.unit * np.exp(x)
+        return a * np.exp(-b * T) + c
+
+    def __call__(self, x):
+        return self.model(x) - self.data
+
+
+@pytest.mark.parametrize("start", [(1.0, 1.0, 1.0), (1.0, 0.01, 1.0), (1.0, 10.0, 1.0),
+                                   (50.0, 1.0, 0.01)])
+def test_stopping_rule_does_not_depend_on_units_or_a_value_of_one(start):
+    """Parameters that start at exactly 1 in their unit (ln x = 0), or at an end of
+    their range: LM reaches the optimum (scipy's bounded solver as reference), and
+    writing them in other units (×1000, ×1/1000: ln x shifted) changes neither the
+    estimates nor the number of evaluations (MINPACK's radius < xtol·‖D·x‖, with D the
+    Jacobian's column norms, did: a parameter at ln x = 0 adds nothing to it)."""
+    lb, ub = np.log([0.1, 0.01, 0.01]), np.log([50.0, 10.0, 20.0])
+    fun = WithBaseline()
+    ref = optimize.least_squares(fun, np.log(start).clip(lb + 1e-9, ub - 1e-9),
+                                 bounds=(lb, ub), method="trf", xtol=1e-12, ftol=1e-12,
+                                 gtol=1e-12).x
+    res = least_squares_log(fun, np.log(start), lb, ub, max_nfev=200, diff_step=1e-5)
+    np.testing.assert_allclose(np.exp(res.x), np.exp(ref), rtol=1e-3)
+    unit = np.array([1e3, 1e-3, 1e3])
+    other = least_squares_log(WithBaseline(unit), np.log(start) - np.log(unit),
+                              lb - np.log(unit), ub - np.log(unit), max_nfev=200,
+                              diff_step=1e-5)
+    np.testing.assert_allclose(unit * np.exp(other.x), np.exp(res.x), rtol=1e-6)
+    assert other.nfev == res.nfev
