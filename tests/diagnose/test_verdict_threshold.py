@@ -36,3 +36,21 @@ def test_waterfall_base_at_the_floor_claims_nothing(factor, word):
     steps = [Step("base", factor * FLOOR), Step("+leak", 1.0 * FLOOR, effects=("leak",))]
     want = (word, []) if word == "adequate" else ("explained", ["leak"])
     assert decide(steps, FLOOR) == want
+
+
+def test_exactly_at_the_tolerance_counts_as_at_the_floor():
+    assert at_floor(1.5 * FLOOR, FLOOR)  # 3.0 ≤ 1.5 × 2.0, exactly representable
+    assert not at_floor(float("nan"), FLOOR) and not at_floor(1.0, float("inf"))
+
+
+def test_base_at_the_floor_is_adequate_even_when_an_effect_step_is_worse():
+    steps = [Step("base", 1.4 * FLOOR), Step("+leak", 1.6 * FLOOR, effects=("leak",))]
+    assert decide(steps, FLOOR) == ("adequate", [])
+
+
+def test_step_json_says_null_for_unknown_numbers():
+    j = Step("base", 3.0, effects=("leak",), extra={"n": 5}).to_json()
+    assert j == {"label": "base", "held_out_rms": 3.0, "held_out_se": None,
+                 "effects": ["leak"], "n": 5}
+    assert Step("x", float("inf"), se=0.5).to_json()["held_out_rms"] is None
+    assert Step("x", 2.0, se=0.5).to_json()["held_out_se"] == 0.5
