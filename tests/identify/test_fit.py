@@ -193,7 +193,7 @@ def test_model_card_round_trips_into_the_same_flows(fitted, bench):
                                                  (296.0, 121.0, 171.0)])
 def test_model_card_in_a_netlist_simulates_the_fits_flows(fitted, p_in, p_out, p_ctrl):
     """Done-criterion 3, part 2: the card pasted into a netlist, operating point."""
-    netlist = pytest.importorskip("pneunet.netlist")
+    from pneunet import netlist
     from pneunet.engine.simulate import operating_point
 
     fit = fitted("axi", mdot_min="auto")

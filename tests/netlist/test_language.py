@@ -124,7 +124,6 @@ def test_model_cards_and_paper_valves():
 
 
 def test_model_card_with_effect_parameters():
-    pytest.importorskip("pneunet.effects.model")
     from pneunet.effects import available_effects, get_effect
 
     eid = available_effects()[0]
