@@ -82,19 +82,34 @@ class Alignment:
         """The same alignment restricted to cycle starts up to ``t1``."""
         return Alignment(self.signal, self.level, self.starts[self.starts <= t1], self.margin)
 
-    def model_times(self, times, sim_t, sim_y) -> np.ndarray:
-        """Simulation times compared with the recorded ``times`` (see the module doc).
+    def model_times(self, times, sim_t, sim_y, first_time: float = 0.0,
+                    settled: bool = False) -> np.ndarray:
+        """Simulation times compared with the recorded ``times`` (see the module doc);
+        ``first_time``: the netlist time of the record's first sample.
 
         The simulation's crossings are found as the recording's are, from its values
-        at the recorded times, so the sampling's own bias cancels."""
+        at the recorded spacing, so the sampling's own bias cancels.  Started from the
+        record's own state, the cycles before the first recorded crossing are compared
+        at their own times; ``settled`` (the simulation settled before the record, in an
+        arbitrary phase): recorded cycle k with the k-th simulated cycle that starts after
+        ``first_time`` + the first recorded crossing, the part before that crossing
+        with the one before it."""
         from .model import sample_at
 
         times = np.asarray(times, float)
-        sim_starts = recorded_crossings(times, sample_at(sim_t, sim_y, times), self.level)
+        if settled:
+            dt = float(np.median(np.diff(times)))
+            grid = np.arange(first_time, float(sim_t[-1]), dt)
+        else:
+            grid = times + first_time
+        sim_starts = recorded_crossings(grid, sample_at(sim_t, sim_y, grid), self.level)
+        if settled:
+            sim_starts = sim_starts[sim_starts >= first_time + self.starts[0]]
         n = min(len(sim_starts), len(self.starts))
         if n == 0:
-            return times
+            return times + first_time
         k = np.searchsorted(self.starts[:n], times, side="right") - 1
+        before = sim_starts[0] - self.starts[0] if settled else first_time
         shift = np.where(k >= 0, sim_starts[np.maximum(k, 0)] - self.starts[np.maximum(k, 0)],
-                         0.0)
+                         before)
         return times + shift

@@ -22,7 +22,8 @@ def read_trace(path_or_frame, signals=None, *, max_rows: int | None = TRACE_MAX_
     Read by :mod:`pneunet.csvdata` (file:line errors, streamed, thinned past
     ``max_rows`` rows).  Columns named in another unit (``p_tank_bar``, ``p_tank_kpa``,
     ``mdot_R1_g_s``, ``time_ms``) are converted; a recording that does not start at
-    t = 0 is shifted to start there (the simulation starts at the first sample).  Each
+    t = 0 is shifted to start there, its first time stamp kept in
+    ``df.attrs["time_origin"]`` (s: the clock of a driven circuit's sources).  Each
     conversion and shift is listed in ``df.attrs["notes"]``; ``df.attrs["source"]``
     names the file.  Raises :class:`DataError` naming the file, the column and the
     line for: a missing file or time column, a column that is not a signal, a
@@ -67,12 +68,15 @@ def read_trace(path_or_frame, signals=None, *, max_rows: int | None = TRACE_MAX_
     _convert(df, units, where)
     _check_values(df, wanted, where, {new: old for old, new in rename.items()})
     t = df["time_s"].to_numpy()
+    origin = float(path_or_frame.attrs.get("time_origin", 0.0)) \
+        if isinstance(path_or_frame, pd.DataFrame) else 0.0
     if t[0] != 0:
-        notes.append(f"time_s starts at {t[0]:g} s: shifted to start at 0 (the simulation "
-                     "starts at the first sample)")
+        notes.append(f"time_s starts at {t[0]:g} s: counted from the first sample (a driven "
+                     "circuit's sources keep the file's clock)")
+        origin += float(t[0])
         df["time_s"] = t - t[0]
     out = df[wanted].reset_index(drop=True)
-    out.attrs.update(source=where, notes=notes)
+    out.attrs.update(source=where, notes=notes, time_origin=origin)
     return out
 
 

@@ -244,16 +244,19 @@ def _screen(cand, names, x_base, jac, params, model_args, data, pool):
 
 def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, signals=None,
                    node: str = "tank", effects=None, train_fraction: float = 0.5,
-                   max_nfev: int = 40, screen: int = 2, tolerance: float = TOLERANCE,
+                   max_nfev: int = 40, screen: int = 3, tolerance: float = TOLERANCE,
                    workers: int | None = None, options: dict | None = None,
-                   progress=None) -> TraceDiagnosis:
+                   progress=None, start_state="auto",
+                   time_offset: float | None = None) -> TraceDiagnosis:
     """Diagnose a circuit recording; see the module docstring.
 
-    ``build``/``params``/``fixed``/``signals``/``node`` as in
-    :func:`~pneunet.traces.fit.fit_trace`; ``effects``: candidate effects (kinds,
+    ``build``/``params``/``fixed``/``signals``/``node``/``start_state``/``time_offset``
+    as in :func:`~pneunet.traces.fit.fit_trace` (one start state, chosen for the base
+    fit, serves every fit); ``effects``: candidate effects (kinds,
     bound effects or their names; default every registered one at every site);
     ``screen``: how many of the best screened candidates are then fitted fully
-    (4 × ``max_nfev``: they have more parameters and start further away);
+    (4 × ``max_nfev``: they have more parameters and start further away; each from its
+    screen's best point and, when that fit stays above the floor, from a second start);
     ``workers``: processes
     for parallel finite differences (None: 2 where there are 2 cores); ``progress``:
     a callable taking a message (e.g. ``print`` to stderr)."""
@@ -273,7 +276,11 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
         say("base fit")
         t0 = time.perf_counter()
         base = fit_trace(build, df, params, fixed=fixed, node=node, window=train,
-                         max_nfev=max_nfev, pool=pool, options=options, where=where)
+                         max_nfev=max_nfev, pool=pool, options=options, where=where,
+                         start_state=start_state, time_offset=time_offset)
+        state = base.start_state
+        say(f"start: {state.describe()}")
+        params = {**params, **{k: v for k, v in state.fitted.items() if k not in params}}
         timing["base_fit_s"] = time.perf_counter() - t0
         fits = {"none": base}
         noise = noise_floor(base)
@@ -283,9 +290,11 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
         steps = [Step("base model", base_err)]
         ranking = [_row("none", base, test, floor)]
         notes = [f"base fit: {base.extras['intervals']['note']}"]
-        circuit = TraceModel(build, fixed, options=options).circuit(base.values)
+        circuit = TraceModel(build, fixed, options=options, state=state).circuit(base.values)
         cand = candidates_for(circuit, effects)
         verdict, accepted = decide(steps, floor, tolerance)
+        fitting = _Fitting(build, df, params, fixed, node, train, test, base, pool, options,
+                           where, state, floor, tolerance)
         if verdict != "adequate" and cand:
             say(f"screening {len(cand)} candidate effects")
             t0 = time.perf_counter()
@@ -295,39 +304,28 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
             n_res = sum(int(v.sum()) for v in data_fit[3].values())
             typical = base.wall_time_s / max(base.nfev, 1)
             rows = _screen(cand, names, x_hat, base.extras["jacobian"], params,
-                           ((build, fixed), {"options": options, "typical_s": typical}),
+                           ((build, fixed), {"options": options, "typical_s": typical,
+                                             "state": state}),
                            data_fit, pool)
             timing["screen_s"] = time.perf_counter() - t0
             timing["screen_simulations"] = sum(r["simulations"] for r in rows)
             t0 = time.perf_counter()
-            failed = {}
-            for row in rows[:screen]:  # best first; stop at one that reaches the floor
+            for row in rows[:screen]:
                 eff = row["effect"]
                 if not math.isfinite(row["rss"]):
-                    failed[eff.name] = ("not fitted: the circuit could not be simulated at any "
-                                        "point of its parameter range")
+                    fitting.failed[eff.name] = ("not fitted: the circuit could not be simulated "
+                                                "at any point of its parameter range")
                     continue
                 say(f"fitting {eff.name}")
-                try:
-                    fits[eff.name] = _fit_effects(build, df, params, fixed, node, train,
-                                                  (eff,), base, [row], 4 * max_nfev, pool,
-                                                  options, where)
-                except SolverError as err:  # its fit does not simulate the whole record
-                    failed[eff.name] = f"fit failed: {err}"
-                    continue
-                if at_floor(fits[eff.name].error(test), floor, tolerance):
-                    break
+                fit = fitting.single(eff, row, 4 * max_nfev)
+                if fit is not None:
+                    fits[eff.name] = fit
             timing["candidate_fits_s"] = time.perf_counter() - t0
             fitted = sorted((n for n in fits if n != "none"), key=lambda n: fits[n].error(test))
-            ranking += [_row(n, fits[n], test, floor) for n in fitted]
-            ranking += [{"effect": r["effect"].name, "held_out_rms": None, "fitted": False,
-                         "screen_rms": math.sqrt(r["rss"] / n_res)
-                         if math.isfinite(r["rss"]) else None,
-                         "note": failed.get(r["effect"].name,
-                                            "not fitted: across its parameter range it fits "
-                                            "the first cycles worse than the ones fitted "
-                                            "fully")}
-                        for r in rows if r["effect"].name not in fits]
+            ranking += [_row(n, fits[n], test, floor, fitting.starts.get(n))
+                        for n in fitted]
+            ranking += [_unfitted_row(r, fitting.failed, n_res) for r in rows
+                        if r["effect"].name not in fits]
             ranking.sort(key=lambda r: (r["held_out_rms"] is None, r["held_out_rms"] or 0))
             if fitted:
                 best = fitted[0]
@@ -338,19 +336,13 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
                     noise, floor = nb, nb["floor"]
                     noise["model"] = best
                 verdict, accepted = decide(steps, floor, tolerance)
-                if verdict == "unexplained" and len(fitted) > 1 \
+                usable = [n for n in fitted[1:] if not _at_bound(fits[n], params)]
+                if verdict == "unexplained" and usable \
                         and steps[1].held_out < steps[0].held_out:
-                    nxt = fitted[1]
+                    nxt = usable[0]
                     say(f"fitting {best} + {nxt}")
-                    try:
-                        pair = _fit_effects(build, df, params, fixed, node, train,
-                                            (fits[best].effects[0], fits[nxt].effects[0]),
-                                            base, None, max_nfev, pool, options, where,
-                                            start={**fits[best].values, **fits[nxt].values})
-                    except SolverError as err:
-                        pair = None
-                        notes.append(f"{best} + {nxt}: fit failed: {err}")
-                    else:
+                    pair = fitting.pair(fits[best], fits[nxt], max_nfev, notes)
+                    if pair is not None:
                         fits[f"{best} + {nxt}"] = pair
                     if pair is not None and pair.error(test) < steps[-1].held_out:
                         steps.append(Step(nxt, pair.error(test), effects=(best, nxt)))
@@ -371,10 +363,103 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
         if pool is not None:
             pool.shutdown()
     timing["total_s"] = time.perf_counter() - wall
-    timing["simulations"] = sum(f.extras.get("simulations", 0) for f in fits.values())
+    timing["simulations"] = sum(f.extras.get("simulations", 0) for f in fits.values()) \
+        + fitting.extra_simulations
     wf = Waterfall(steps, floor, unit)
+    notes.insert(0, f"start: {state.describe()}")
     return TraceDiagnosis(verdict, accepted, floor, unit, ranking, fits, wf, where_txt,
                           {k: v for k, v in noise.items()}, train, test, timing, notes)
+
+
+class _Fitting:
+    """The full fits of candidate effects within one diagnosis: each from its screen's
+    best point and, when that stays above the floor (or stops at a bound, or fails),
+    from a second start (the effect's own guess, or its range's log-middle); pairs
+    started from each single fit's own values."""
+
+    def __init__(self, build, df, params, fixed, node, train, test, base, pool, options,
+                 where, state, floor, tolerance):
+        self.build, self.df, self.params, self.fixed, self.node = build, df, params, fixed, node
+        self.train, self.test, self.base, self.pool, self.options = train, test, base, pool, options
+        self.where, self.state, self.floor, self.tolerance = where, state, floor, tolerance
+        self.failed = {}  # effect name -> why it has no fit
+        self.starts = {}  # effect name -> [{start values, held-out rms}] tried
+        self.extra_simulations = 0  # of fits tried and not kept
+
+    def _fit(self, effs, x_start, max_nfev):
+        p = {k: (float(np.clip(self.base.values[k], lo, hi)), lo, hi)
+             for k, (_, lo, hi) in self.params.items()}
+        for e in effs:
+            p.update(e.params)
+        x = {k: self.base.values[k] for k in self.params}
+        x.update(x_start)
+        for k in p:
+            x.setdefault(k, p[k][0])
+        return fit_trace(self.build, self.df, p, fixed=self.fixed, node=self.node,
+                         window=self.train, effects=effs, max_nfev=max_nfev, pool=self.pool,
+                         options=self.options, x_start=x, where=self.where,
+                         start_state=self.state)
+
+    def single(self, eff, row, max_nfev) -> TraceFit | None:
+        """The better (held-out) of the fits from the screen's best point and, when
+        needed, a second start; None (and a reason in ``failed``) when both fail."""
+        tried, best, errors = [], None, []
+        for x_start in (row["x"], None):
+            if x_start is None:
+                if best is not None and at_floor(best.error(self.test), self.floor,
+                                                 self.tolerance) \
+                        and not _at_bound(best, self.params):
+                    break
+                x_start = {k: _second_start(v, row["x"].get(k)) for k, v in eff.params.items()}
+            try:
+                fit = self._fit((eff,), x_start, max_nfev)
+            except SolverError as err:
+                errors.append(str(err))
+                continue
+            tried.append({"start": {k: float(x_start[k]) for k in eff.params if k in x_start},
+                          "held_out_rms": fit.error(self.test)})
+            if best is None or fit.error(self.test) < best.error(self.test):
+                if best is not None:
+                    self.extra_simulations += best.extras.get("simulations", 0)
+                best = fit
+            else:
+                self.extra_simulations += fit.extras.get("simulations", 0)
+        self.starts[eff.name] = tried
+        if best is None:
+            self.failed[eff.name] = "fit failed: " + "; ".join(errors)
+        return best
+
+    def pair(self, first: TraceFit, second: TraceFit, max_nfev, notes) -> TraceFit | None:
+        """Both effects at once, started from ``first``'s values with ``second``'s own
+        effect parameters (never values a failed fit left at a bound)."""
+        e1, e2 = first.effects[0], second.effects[0]
+        x_start = dict(first.values)
+        x_start.update({k: second.values[k] for k in e2.params})
+        try:
+            return self._fit((e1, e2), x_start, max_nfev)
+        except SolverError as err:
+            notes.append(f"{e1.name} + {e2.name}: fit failed: {err}")
+            return None
+
+
+def _second_start(spec, first):
+    """A second starting value of an effect parameter ``spec`` = (guess, low, high):
+    its guess, or when the first start was near it, the log-middle of its range."""
+    guess, lo, hi = spec
+    mid = math.sqrt(lo * hi)
+    if first is None or abs(math.log(first / guess)) > 0.5:
+        return guess
+    return mid
+
+
+def _unfitted_row(row, failed, n_res) -> dict:
+    name = row["effect"].name
+    return {"effect": name, "held_out_rms": None, "fitted": False,
+            "status": "failed" if name in failed else "screened out",
+            "screen_rms": math.sqrt(row["rss"] / n_res) if math.isfinite(row["rss"]) else None,
+            "screen_values": {k: float(v) for k, v in row["x"].items()},
+            "note": failed.get(name, "not fitted: across its parameter range it fits the first "
+                                     "cycles worse than the ones fitted fully")}
 
 
 def _fit_data(df, window, base: TraceFit):
@@ -389,27 +474,17 @@ def _fit_data(df, window, base: TraceFit):
             base.extras.get("alignment"))
 
 
-def _fit_effects(build, df, params, fixed, node, train, effs, base, rows, max_nfev, pool,
-                 options, where, start=None):
-    p = {k: (float(np.clip(base.values[k], lo, hi)), lo, hi) for k, (_, lo, hi) in params.items()}
-    for e in effs:
-        p.update(e.params)
-    x_start = dict(start or {})
-    if rows:
-        x_start.update(rows[0]["x"])
-    for k in p:
-        x_start.setdefault(k, p[k][0])
-    return fit_trace(build, df, p, fixed=fixed, node=node, window=train, effects=effs,
-                     max_nfev=max_nfev, pool=pool, options=options, x_start=x_start,
-                     where=where)
-
-
-def _row(name, fit: TraceFit, test, floor) -> dict:
+def _row(name, fit: TraceFit, test, floor, starts=None) -> dict:
     h = fit.error(test)
-    return {"effect": name, "held_out_rms": h, "ratio_to_floor": h / floor if floor else None,
-            "fitted": True, "train_rms": fit.error(), "period_error": fit.period_error,
-            "values": {k: float(v) for k, v in fit.values.items()},
-            "ci": {k: list(v) for k, v in fit.ci.items()}, "nfev": fit.nfev}
+    row = {"effect": name, "held_out_rms": h, "ratio_to_floor": h / floor if floor else None,
+           "fitted": True, "status": "fitted", "train_rms": fit.error(),
+           "period_error": fit.period_error,
+           "values": {k: float(v) for k, v in fit.values.items()},
+           "ci": {k: list(v) for k, v in fit.ci.items()}, "nfev": fit.nfev,
+           "converged": fit.success, "message": fit.message}
+    if starts is not None:
+        row["starts"] = starts
+    return row
 
 
 def _at_bound(fit: TraceFit, base_params, tol=0.01) -> str:

@@ -23,6 +23,7 @@ from ..truth.intervals import intervals
 from ..truth.lsq import least_squares_log
 from .align import Alignment
 from .data import compared_samples, read_trace, signal_of_column
+from .initial_state import StartState, choose_start
 from .model import DIFF_STEP, FIT_OPTIONS, TraceModel, TraceResidual, sample_at
 
 
@@ -91,8 +92,14 @@ class TraceFit(Summarized):
                 "sigma": self.sigma, "nfev": self.nfev, "success": self.success,
                 "message": self.message, "effects": [e.name for e in self.effects],
                 "wall_time_s": self.wall_time_s, "unit": self.unit,
+                "start_state": self.start_state.to_json() if self.start_state else None,
                 **{k: v for k, v in self.extras.items()
-                   if k not in ("stage1", "alignment", "jacobian")}}
+                   if k not in ("stage1", "alignment", "jacobian", "start_state")}}
+
+    @property
+    def start_state(self):
+        """The :class:`~pneunet.traces.initial_state.StartState` the fit used."""
+        return self.extras.get("start_state")
 
     def report(self) -> str:
         lines = ["parameter        estimate      95 % CI"]
@@ -106,6 +113,8 @@ class TraceFit(Summarized):
         note = self.extras.get("intervals", {}).get("note")
         if note:
             lines.append(f"intervals: {note}")
+        if self.start_state is not None:
+            lines.append(f"start: {self.start_state.describe()}")
         return "\n".join(lines)
 
 
@@ -128,7 +137,8 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
               confidence: float = 0.95, phase_bins: int = 20, start: str = "ic",
               features: bool = True, diff_step: float = DIFF_STEP, options: dict | None = None,
               pool=None, x_start: dict | None = None, where: str | None = None,
-              align: bool = True) -> TraceFit:
+              align: bool = True, start_state="auto",
+              time_offset: float | None = None) -> TraceFit:
     """Estimate ``params`` ({name: (guess, low, high)}) so the circuit reproduces ``data``.
 
     ``build(point) -> Circuit`` (or a :class:`~pneunet.analysis.sweep.NetlistBuilder`)
@@ -140,7 +150,13 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
     the simulations of the least-squares stage (Jacobian included); ``pool``: an
     executor for the Jacobian's columns; ``x_start``: starting values (skips the
     cycle stage); ``align``: compare an oscillating record cycle by cycle, each
-    simulated cycle started at its own crossing (:mod:`pneunet.traces.align`).
+    simulated cycle started at its own crossing (:mod:`pneunet.traces.align`), for a
+    circuit that oscillates on its own (a driven one is compared on the record's time
+    axis); ``start_state``: the circuit's state at the first sample, 'auto', 'rest',
+    'record', 'settled' or a :class:`~pneunet.traces.initial_state.StartState`
+    (:mod:`pneunet.traces.initial_state`; fitted initial pressures ``p0@NODE`` join the
+    estimates); ``time_offset``: netlist time of the first sample (s; default: the
+    file's first time stamp for a driven circuit, else 0).
 
     Two stages: with ``features`` and an oscillating record at ``node``, starting
     values from the cycle (:mod:`pneunet.traces.start`); then Levenberg–Marquardt on
@@ -163,13 +179,18 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
         mask = (times >= window[0]) & (times <= window[1])
     if mask.sum() < 5:
         raise DataError("fewer than 5 samples in the fit window", where=where)
-    names = list(params)
-    for k in names:
+    for k in params:
         g, lo, hi = params[k]
         if not 0 < lo <= g <= hi:
             raise ParameterError(f"fit parameter {k}: need 0 < low ≤ guess ≤ high, got {params[k]}")
     model = TraceModel(build, fixed, effects, start, FIT_OPTIONS if options is None else options)
-    check_signals(model, {k: v[0] for k, v in params.items()}, cols, where)
+    guess = {k: v[0] for k, v in params.items()}
+    check_signals(model, guess, cols, where)
+    state = start_state if isinstance(start_state, StartState) else choose_start(
+        model, guess, df, start_state, time_offset, where)
+    model = model.with_state(state)
+    params = {**params, **{k: v for k, v in state.fitted.items() if k not in params}}
+    names = list(params)
     x0 = np.log([params[k][0] for k in names])
     lb = np.log([params[k][1] for k in names])
     ub = np.log([params[k][2] for k in names])
@@ -179,7 +200,7 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
     t_fit = times[mask]
     node = node or next((s[2:] for s in sigs if s.startswith("p_")), None)
     aligned = None
-    if align and node and f"p_{node}" in meas:
+    if align and not state.driven and node and f"p_{node}" in meas:
         aligned = Alignment.of(times, meas[f"p_{node}"], f"p_{node}")
     fun = TraceResidual(model, names, t_fit, sigs, {s: meas[s][mask] for s in sigs},
                         {s: keep_all[s][mask] for s in sigs}, scales, aligned)
@@ -217,14 +238,14 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
         centre, rms = phase_profile(phase[mask], resid[s][mask], phase_bins)
         rows["phase"], rows[s] = centre, rms
     phase_rms = pd.DataFrame(rows)
-    pm, ps, perr = period_error(times, ref, sol, node, mask)
+    pm, ps, perr = period_error(times, ref, sol, node, mask, model.first_time)
     nfev = calls0 + res.nfev
     return TraceFit(est, ci, se, rmse, frame, phase_rms, pm, ps, perr, float(info["s"]),
                     int(nfev), res.success,
                     res.message + (f"; {fun.failures} failed simulations" if fun.failures else ""),
                     tuple(effects), sol, time.perf_counter() - wall, unit, scales,
                     {"stage1": stage1, "simulations": nfev, "intervals": info,
-                     "alignment": aligned, "jacobian": res.jac,
+                     "alignment": aligned, "jacobian": res.jac, "start_state": state,
                      "compared": {s: int(keep_all[s].sum()) for s in sigs}})
 
 
@@ -243,15 +264,16 @@ def check_signals(model: TraceModel, values: dict, columns, where: str) -> None:
                             where=where, hint="elements: " + ", ".join(sorted(elements)))
 
 
-def period_error(times, ref, sol, node, mask):
-    """(measured, simulated, simulated − measured) period at ``node`` in ``mask``, s."""
+def period_error(times, ref, sol, node, mask, first_time: float = 0.0):
+    """(measured, simulated, simulated − measured) period at ``node`` in ``mask``, s
+    (``first_time``: the netlist time of the first sample)."""
     from ..analysis.oscillation import analyze_oscillation
     from .start import cycle_features
 
     w = mask
     try:
         m = analyze_oscillation(times[w], ref[w])
-        sim_t = sol.t
+        sim_t = sol.t - first_time
         inside = (sim_t >= times[w][0]) & (sim_t <= times[w][-1])
         s = analyze_oscillation(sim_t[inside], sol.pressure(node)[inside]) if node else m
         if m.oscillating and s.oscillating:

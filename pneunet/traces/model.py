@@ -31,14 +31,26 @@ class TraceModel:
     (``typical_s``: a typical simulation's wall time, for the budget of the first)."""
 
     def __init__(self, build: Callable, fixed: dict | None = None, effects=(), start: str = "ic",
-                 options: dict | None = None, typical_s: float | None = None):
+                 options: dict | None = None, typical_s: float | None = None, state=None):
         self.build, self.fixed, self.effects, self.start = build, dict(fixed or {}), tuple(effects), start
         self.options = dict(options or {})
+        self.state = state  # a StartState (pneunet.traces.initial_state); None: rest at t = 0
         self.calls = 0
         self.failures = 0  # simulations that failed (SolverError, budget included)
         self._times = [] if typical_s is None else [float(typical_s)]
 
-    def circuit(self, values: dict):
+    def with_state(self, state) -> "TraceModel":
+        """The same model started from ``state``."""
+        return TraceModel(self.build, self.fixed, self.effects, self.start, self.options,
+                          float(np.median(self._times)) if self._times else None, state)
+
+    @property
+    def first_time(self) -> float:
+        """Netlist time of the record's first sample, s."""
+        return 0.0 if self.state is None else self.state.first_time
+
+    def base_circuit(self, values: dict):
+        """The netlist's circuit at ``values`` (no effects, no start state)."""
         from ..analysis.sweep import apply_overrides
 
         point = dict(self.fixed)
@@ -47,9 +59,15 @@ class TraceModel:
         apply_overrides(c, point)
         if self.options:
             c.options = c.options.replace(**self.options)
+        return c
+
+    def circuit(self, values: dict):
+        c = self.base_circuit(values)
+        if self.state is not None:
+            self.state.apply(c, values)
         settled = None
         if self.start == "ic" and (self.effects or c.options.dead_volume > 0):
-            settled = settled_pressures(c)
+            settled = settled_pressures(c, self.state.time_offset if self.state else 0.0)
         old_nodes = set(c.nodes)
         for eff in self.effects:
             eff.apply(c, {k: values.get(k, eff.params[k][0]) for k in eff.params})
@@ -58,10 +76,14 @@ class TraceModel:
         return c
 
     def _effect_param(self, name):
-        return any(name in e.params for e in self.effects)
+        """Whether ``name`` is an effect's or the start state's parameter (not the
+        netlist's)."""
+        return any(name in e.params for e in self.effects) or (
+            self.state is not None and name in self.state.fitted)
 
     def simulate(self, values: dict, t_end: float, t_step: float | None = None):
-        """The transient to ``t_end``; a :class:`~pneunet.errors.SolverError` when it
+        """The transient to ``t_end`` s after the record's first sample (on the netlist's
+        clock: from the start state's time offset, through its settling time); a :class:`~pneunet.errors.SolverError` when it
         takes more than :data:`BUDGET_FACTOR` × the median simulation so far (at least
         :data:`BUDGET_MIN_S`): a fit's trial point that makes the circuit stiff or
         chattering is a failed point, not minutes lost."""
@@ -70,9 +92,11 @@ class TraceModel:
         budget = max(BUDGET_MIN_S, BUDGET_FACTOR * float(np.median(self._times))) \
             if self._times else None
         start = time.perf_counter()
+        t0 = 0.0 if self.state is None else self.state.time_offset
         try:
             with wall_clock_budget(budget):
-                sol = circuit.tran(t_end, t_step=t_step, start=self.start)
+                sol = circuit.tran(self.first_time + t_end, t_step=t_step, t_start=t0,
+                                   start=self.start)
         except SolverError:
             self.failures += 1
             raise
@@ -82,20 +106,27 @@ class TraceModel:
     def sample(self, values: dict, times, signals, align=None):
         """({signal: samples at ``times``}, solution); output on the sample spacing.
 
-        With ``align`` (:class:`~pneunet.traces.align.Alignment`) each recorded cycle
-        is compared with the simulated cycle of the same number, started at its own
-        crossing (the simulation runs ``align.margin`` past the record)."""
+        ``times`` count from the record's first sample (netlist time
+        :attr:`first_time`).  With ``align`` (:class:`~pneunet.traces.align.Alignment`)
+        each recorded cycle is compared with the simulated cycle of the same number (in
+        a settled start: the first after the settling time), started at its own crossing
+        (the simulation runs ``align.margin`` past the record, twice that settled)."""
         dt = float(np.median(np.diff(times))) if len(times) > 1 else None
-        t_end = float(times[-1]) + (align.margin if align is not None else 0.0)
+        settled = self.state is not None and self.state.mode == "settled"
+        t_end = float(times[-1]) + (align.margin * (2 if settled else 1)
+                                    if align is not None else 0.0)
         sol = self.simulate(values, t_end, dt)
-        at = times if align is None else align.model_times(times, sol.t, sol[align.signal])
+        if align is None:
+            at = times + self.first_time
+        else:
+            at = align.model_times(times, sol.t, sol[align.signal], self.first_time, settled)
         return {s: sample_at(sol.t, sol[s], at) for s in signals}, sol
 
 
-def settled_pressures(circuit) -> dict:
-    """({node: pressure}, algebraic nodes) of the circuit's consistent state at t = 0
-    (every node, those of pressure sources and the reference included) without dead volumes (the algebraic nodes solved for the initial storage
-    pressures), kPa."""
+def settled_pressures(circuit, t0: float = 0.0) -> dict:
+    """({node: pressure}, algebraic nodes) of the circuit's consistent state at ``t0``
+    (s; every node, those of pressure sources and the reference included) without dead
+    volumes (the algebraic nodes solved for the initial storage pressures), kPa."""
     from ..engine.assembly import CircuitDAE
     from ..engine.simulate import consistent_state
 
@@ -103,11 +134,11 @@ def settled_pressures(circuit) -> dict:
     circuit.options = options.replace(dead_volume=0.0)
     try:
         dae = CircuitDAE(circuit)
-        y, _ = consistent_state(dae, 0.0, dae.initial_state(0.0))
+        y, _ = consistent_state(dae, t0, dae.initial_state(t0))
     finally:
         circuit.options = options
     names = list(dae.node_names) + list(dae.fixed_names)  # sources' nodes too
-    return (dict(zip(names, map(float, dae.full_pressures(0.0, y)))),
+    return (dict(zip(names, map(float, dae.full_pressures(t0, y)))),
             {dae.node_names[i] for i in dae.algebraic_idx})
 
 

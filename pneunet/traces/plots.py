@@ -21,7 +21,9 @@ def plot_fit(fit, data, path=None, signals=None):
     for s in sigs:
         col = [c for c in df.columns if signal_of_column(c) == s][0]
         axes[0].plot(df["time_s"], df[col], ".", ms=2, alpha=0.5, label=f"{s} recorded")
-        axes[0].plot(fit.solution.t, fit.solution[s], lw=1, label=f"{s} fitted")
+        # the model as compared: on the record's axis, cycle-aligned where the fit was
+        axes[0].plot(r["time_s"], df[col].to_numpy() + r[s].to_numpy(), lw=1,
+                     label=f"{s} fitted")
         axes[1].plot(r["time_s"], r[s], lw=0.7, label=s)
         axes[2].plot(fit.phase_rms["phase"], fit.phase_rms[s], "o-", ms=3, label=s)
     if not r["fitted"].all():

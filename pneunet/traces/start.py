@@ -188,7 +188,8 @@ def initial_values(model, names, x0, lb, ub, t_fit, y_meas, node, iterations: in
         values = dict(zip(names, np.exp(x)))
         try:
             sol = model.simulate(values, float(t_fit[-1]), float(np.median(np.diff(t_fit))))
-            sim_f = cycle_features(t_fit, sample_at(sol.t, sol.pressure(node), t_fit),
+            sim_f = cycle_features(t_fit, sample_at(sol.t - model.first_time,
+                                                    sol.pressure(node), t_fit),
                                    target["levels"])
         except PneunetError:
             sim_f = None
@@ -238,8 +239,9 @@ def _feature_fit(model, names, x0, lb, ub, t_fit, y_meas, node, max_nfev):
     def fres(x):
         try:
             sol = model.simulate(dict(zip(names, np.exp(x))), float(t_fit[-1]))
-            inside = sol.t >= t_fit[0]
-            f = _features(sol.t[inside], sol.pressure(node)[inside])
+            sim_t = sol.t - model.first_time
+            inside = sim_t >= t_fit[0]
+            f = _features(sim_t[inside], sol.pressure(node)[inside])
         except PneunetError:
             f = None
         if f is None:

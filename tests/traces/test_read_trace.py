@@ -30,7 +30,10 @@ def test_a_record_starting_at_1000_s_is_shifted_to_0(tmp_path, record):
     record.assign(time_s=record.time_s + 1000.0).to_csv(path, index=False)
     df = read_trace(path)
     np.testing.assert_allclose(df["time_s"], record["time_s"], atol=1e-9)
-    assert "time_s starts at 1000 s: shifted to start at 0" in df.attrs["notes"][0]
+    assert "time_s starts at 1000 s: counted from the first sample" in df.attrs["notes"][0]
+    assert df.attrs["time_origin"] == pytest.approx(1000.0)  # a driven circuit's clock
+    # read again (a frame already read): the clock is kept, not shifted twice
+    assert read_trace(df).attrs["time_origin"] == pytest.approx(1000.0)
 
 
 def test_unknown_columns_are_refused_unless_signals_are_chosen(tmp_path, record):
