@@ -35,6 +35,11 @@ class Waveform(ABC):
         """The subset of breakpoints where the value itself is discontinuous."""
         return np.empty(0)
 
+    def corner_count(self, t_start: float, t_stop: float) -> float:
+        """How many breakpoints (at most) lie in (t_start, t_stop), counted without
+        making them: a periodic waveform's count is checked before it is allocated."""
+        return len(self.breakpoints(t_start, t_stop))
+
     @abstractmethod
     def netlist(self) -> str:
         """The netlist text that writes this waveform back."""
@@ -170,6 +175,11 @@ class Pulse(Waveform):
 
     def breakpoints(self, t_start, t_stop):
         return _inside(np.unique(self._corners(t_stop).ravel()), t_start, t_stop)
+
+    def corner_count(self, t_start, t_stop):
+        if not self.period > 0:
+            return 4.0
+        return 4.0 * (np.ceil(max(t_stop - max(self.delay, t_start), 0.0) / self.period) + 2)
 
     def jumps(self, t_start, t_stop):
         corners = self._corners(t_stop)

@@ -505,8 +505,10 @@ def _json_default(o):
     return repr(o)
 
 
-def parse_axis(text: str) -> Axis:
-    """Parse a CLI axis ``NAME=lin:START:STOP:N``, ``log:..``, ``list:a,b,c`` or ``a,b,c``."""
+def parse_axis(text: str, max_points: int | None = None) -> Axis:
+    """Parse a CLI axis ``NAME=lin:START:STOP:N``, ``log:..``, ``list:a,b,c`` or ``a,b,c``;
+    ``N`` is checked against ``max_points`` (the ``max_sweep_points`` limit) before any
+    value is made."""
     if "=" not in text:
         raise ParameterError(f"bad sweep axis {text!r}", hint="NAME=lin:0.2:2.5:20, NAME=log:1:10:5 "
                                                                "or NAME=list:1,2,3")
@@ -515,7 +517,15 @@ def parse_axis(text: str) -> Axis:
     try:
         if kind in ("lin", "log"):
             a, b, n = rest.split(":")
-            return (lin if kind == "lin" else log)(name, float(a), float(b), int(n))
+            count = float(n)
+            if not (count >= 1 and count == int(count)):
+                raise ParameterError(f"sweep axis {text!r}: N must be a whole number >= 1")
+            if max_points is not None and count > max_points:
+                raise ParameterError(f"sweep axis {text!r} asks for {count:.6g} points (limit "
+                                     f"max_sweep_points = {max_points})",
+                                     hint="if it is meant, raise the limit with --limit "
+                                          "max_sweep_points=N")
+            return (lin if kind == "lin" else log)(name, float(a), float(b), int(count))
         if kind == "list":
             return values(name, [float(x) for x in rest.split(",")])
         return values(name, [float(x) for x in spec.split(",")])

@@ -3,12 +3,13 @@
 Each sub-command module defines ``register(subparsers)``, which adds its parser
 and sets ``func(args) -> int`` as default.  Errors derived from
 :class:`~pneunet.errors.PneunetError` become a message and an exit code
-(0 ok, 1 every point of a sweep failed, 2 bad input or a simulation that cannot
-be completed); no traceback reaches the user.
+(0 ok, 1 every point of a sweep failed, 2 bad input, an unwritable output or a
+simulation that cannot be completed, 141 a closed pipe); no traceback reaches the user.
 """
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
 import sys
 import warnings
@@ -44,20 +45,102 @@ def main(argv: list[str] | None = None) -> int:
     from ..errors import PneunetError
 
     parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as done:  # --help, --version, or a bad option (argparse said why)
+        return done.code if isinstance(done.code, int) else 2
     if not getattr(args, "func", None):
         parser.print_help()
         return 2
     try:
-        with warnings.catch_warnings():
+        with warnings.catch_warnings(), _named_stdout():
             _show_solver_warnings(quiet=getattr(args, "quiet", False))
-            return int(args.func(args) or 0)
+            code = int(args.func(args) or 0)
+            sys.stdout.flush()  # a full disk or a closed pipe is reported here, not at exit
+        return code
     except PneunetError as err:
         print(err.report(), file=sys.stderr)
         return err.exit_code
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:
+        return _closed_pipe()
+    except OSError as err:  # writing a result: a full disk, /dev/full, a vanished folder
+        print(f"error: {_written(err)}: {err.strerror or err}", file=sys.stderr)
+        return 2
+    except MemoryError:
+        print("error: out of memory (a size beyond what this machine holds); "
+              "hint: ask for fewer points, samples or elements", file=sys.stderr)
+        return 2
+
+
+def _written(err: OSError) -> str:
+    """The file an OSError was about: its name, else the file object being written in the
+    innermost frame that holds one (a write error carries no name)."""
+    import io
+
+    if err.filename is not None:
+        return str(err.filename)
+    tb, names = err.__traceback__, []
+    while tb is not None:
+        names += [v.name for v in tb.tb_frame.f_locals.values()
+                  if isinstance(v, io.IOBase) and isinstance(getattr(v, "name", None), str)]
+        tb = tb.tb_next
+    return names[-1] if names else "an output file"
+
+
+class _NamedStdout:
+    """sys.stdout whose write errors name it (``OSError.filename`` "standard output")."""
+
+    def __init__(self, stream):
+        self._stream = stream
+
+    def __getattr__(self, name):
+        return getattr(self._stream, name)
+
+    def write(self, text):
+        return self._call(self._stream.write, text)
+
+    def flush(self):
+        return self._call(self._stream.flush)
+
+    def _call(self, method, *args):
+        try:
+            return method(*args)
+        except BrokenPipeError:
+            raise
+        except OSError as err:
+            _drop_stdout()
+            raise OSError(err.errno, err.strerror, "standard output") from None
+
+
+@contextlib.contextmanager
+def _named_stdout():
+    stream = sys.stdout
+    sys.stdout = _NamedStdout(stream)
+    try:
+        yield
+    finally:
+        sys.stdout = stream
+
+
+def _closed_pipe() -> int:
+    """The reader of stdout went away (``| head``): stop quietly, as a tool killed by
+    SIGPIPE does (exit 141)."""
+    _drop_stdout()
+    return 141
+
+
+def _drop_stdout() -> None:
+    """Point stdout at /dev/null, so that Python's flush at exit writes nothing."""
+    import os
+
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError):
+        pass
 
 
 def _show_solver_warnings(quiet: bool) -> None:

@@ -4,6 +4,8 @@ from __future__ import annotations
 import json
 
 from . import netlist_args
+from .numbers import real
+from .outputs import output_file
 
 
 def register(subparsers) -> None:
@@ -16,14 +18,14 @@ def register(subparsers) -> None:
                     "(the oscillator is recognised in it) or from the options below.")
     p.add_argument("netlist", nargs="?", metavar="FILE.pn", help="netlist with the oscillator")
     p.add_argument("--node", default=None, help="control node of the oscillator (netlist)")
-    p.add_argument("--pH", type=float, default=496.0, help="supply pressure, kPa abs (496)")
-    p.add_argument("--pL", type=float, default=96.0, help="vent pressure, kPa abs (96)")
-    p.add_argument("--rout", type=float, default=1.132, help="R_out, kPa*s/mg (1.132 = 2 R_f)")
-    p.add_argument("--rvent", type=float, default=3.0, help="R_vent, kPa*s/mg (3)")
+    p.add_argument("--pH", type=real(above=0, unit=" kPa"), default=496.0, help="supply pressure, kPa abs (496)")
+    p.add_argument("--pL", type=real(above=0, unit=" kPa"), default=96.0, help="vent pressure, kPa abs (96)")
+    p.add_argument("--rout", type=real(above=0, unit=" kPa*s/mg"), default=1.132, help="R_out, kPa*s/mg (1.132 = 2 R_f)")
+    p.add_argument("--rvent", type=real(above=0, unit=" kPa*s/mg"), default=3.0, help="R_vent, kPa*s/mg (3)")
     p.add_argument("--valve", default="axi", help="paper valve name (axi, mirror, ...)")
-    p.add_argument("--simulate", type=float, default=0.0, metavar="S",
+    p.add_argument("--simulate", type=real(0, unit=" s"), default=0.0, metavar="S",
                    help="also simulate S seconds and overlay the trajectory / compare extremes")
-    p.add_argument("--plot", metavar="PNG", default=None, help="write the Fig. 11 style plot")
+    p.add_argument("--plot", metavar="PNG", default=None, type=output_file(plot=True), help="write the Fig. 11 style plot")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--quiet", "-q", action="store_true",

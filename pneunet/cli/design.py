@@ -5,6 +5,8 @@ import json
 
 from . import netlist_args
 from .executors import add_executor_args
+from .numbers import whole, within
+from .outputs import output_file
 
 
 def register(subparsers) -> None:
@@ -30,15 +32,15 @@ def register(subparsers) -> None:
     p.add_argument("--node", default=None,
                    help="node of the built-in metrics (default: the first valve's control "
                         "node)")
-    p.add_argument("--starts", type=int, default=None, metavar="N",
+    p.add_argument("--starts", type=whole(1), default=None, metavar="N",
                    help="Latin-hypercube points of the first stage (default 6 per "
                         "parameter, at least 8)")
-    p.add_argument("--max-evaluations", type=int, default=25, metavar="N",
+    p.add_argument("--max-evaluations", type=whole(1), default=25, metavar="N",
                    help="least-squares iterations per start (default 25)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the Latin hypercube and the yield's samples")
+    p.add_argument("--seed", type=whole(0), default=0, help="seed of the Latin hypercube and the yield's samples")
     add_executor_args(p)
     y = p.add_argument_group("yield under manufacturing spread")
-    y.add_argument("--yield", dest="n_yield", type=int, default=0, metavar="N",
+    y.add_argument("--yield", dest="n_yield", type=whole(0), default=0, metavar="N",
                    help="Monte Carlo samples of the spread at the design (or, without "
                         "--vary, at the netlist's values): yield with its standard error, "
                         "sensitivities")
@@ -52,8 +54,8 @@ def register(subparsers) -> None:
     y.add_argument("--derivatives", action="store_true",
                    help="also the effects of ±1 SD by central differences at the design "
                         "(2 simulations per spread parameter): a check of linearity")
-    y.add_argument("--tornado", metavar="PNG", default=None, help="write the tornado plot")
-    y.add_argument("--samples", metavar="CSV", default=None,
+    y.add_argument("--tornado", metavar="PNG", default=None, type=output_file(plot=True), help="write the tornado plot")
+    y.add_argument("--samples", metavar="CSV", default=None, type=output_file(),
                    help="write the yield samples (parameters, metrics, pass)")
     p.add_argument("--json", action="store_true", help="print the result as JSON only")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -74,6 +76,10 @@ def main(args) -> int:
     from ..errors import ParameterError
     from .executors import dask_or_local
 
+    limits = netlist_args.limits(args)
+    within(args.n_yield, "--yield", limits, "max_samples")
+    within(args.starts or 0, "--starts", limits, "max_samples")
+    within(args.max_evaluations, "--max-evaluations", limits, "max_samples")
     ranges = [parse_range(text) for text in args.vary]
     tolerances = [parse_tolerance(text) for text in args.tolerance]
     fits = [_element_file(text) for text in args.fit]

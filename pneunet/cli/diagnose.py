@@ -5,6 +5,8 @@ import json
 import sys
 
 from ..csvdata import BENCH_MAX_ROWS
+from .numbers import real, whole
+from .outputs import output_file, output_folder
 
 
 def register(subparsers):
@@ -21,17 +23,17 @@ def register(subparsers):
     p.add_argument("--plugin", action="append", default=[], metavar="MODULE",
                    help="import a Python module (or file.py) that registers user effects; "
                         "repeatable")
-    p.add_argument("--plots", metavar="DIR", help="write the report figures (PNG) to DIR")
+    p.add_argument("--plots", metavar="DIR", type=output_folder, help="write the report figures (PNG) to DIR")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
-    p.add_argument("--model-out", metavar="FILE",
+    p.add_argument("--model-out", metavar="FILE", type=output_file(),
                    help="write the fitted model with its effects as a .model card")
     p.add_argument("--name", default="VDIAG", help="model name of the card (default VDIAG)")
-    p.add_argument("--folds", type=int, default=5, help="cross-validation folds (default 5)")
-    p.add_argument("--max-effects", type=int, default=3, help="accept at most N effects")
-    p.add_argument("--ambient", type=float, metavar="KPA",
+    p.add_argument("--folds", type=whole(2, 100), default=5, help="cross-validation folds (default 5)")
+    p.add_argument("--max-effects", type=whole(0, 100), default=3, help="accept at most N effects")
+    p.add_argument("--ambient", type=real(above=0, unit=" kPa"), metavar="KPA",
                    help="barometric pressure for gauge data (with --gauge)")
     p.add_argument("--gauge", action="store_true", help="pressures in the file are gauge")
-    p.add_argument("--max-rows", type=int, default=BENCH_MAX_ROWS, metavar="N",
+    p.add_argument("--max-rows", type=whole(1), default=BENCH_MAX_ROWS, metavar="N",
                    help=f"read at most N data rows; a longer file is thinned evenly with a "
                         f"notice (default {BENCH_MAX_ROWS})")
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")

@@ -6,11 +6,17 @@ import contextlib
 
 def add_executor_args(parser) -> None:
     """``--workers N`` and ``--dask ADDRESS|local`` (read by :func:`dask_or_local`)."""
-    parser.add_argument("--workers", type=int, default=None,
+    from .numbers import whole
+
+    parser.add_argument("--workers", type=whole(1, MAX_WORKERS), default=None,
                         help="local worker processes (default: all cores; 1 = no pool)")
     parser.add_argument("--dask", metavar="ADDRESS", default=None,
                         help="run on a dask.distributed scheduler (ADDRESS, or 'local' for a "
                              "LocalCluster on this machine)")
+
+
+#: local worker processes at most (each is a Python process of its own)
+MAX_WORKERS = 256
 
 
 @contextlib.contextmanager

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+import math
 import os
 import sys
 
@@ -35,6 +36,15 @@ def register(subparsers) -> None:
                    help="recorded column to fit (default: all)")
     p.add_argument("--node", default="tank", help="node whose cycles set the phase, the period "
                                                   "and the fit/held-out split (tank)")
+    p.add_argument("--start", choices=("auto", "rest", "record", "settled"), default="auto",
+                   help="the circuit's state at the first sample: rest (the netlist's: a "
+                        "recording from switch-on), record (read from the first samples; "
+                        "unrecorded storage fitted), settled (an oscillator's settled cycle, "
+                        "aligned in phase); auto: rest when the first samples are at rest, "
+                        "else record")
+    p.add_argument("--time-offset", type=float, default=None, metavar="S",
+                   help="netlist time of the first sample, s (default: the file's first time "
+                        "stamp for a circuit driven by its sources, else 0)")
     p.add_argument("--candidates", action="store_true",
                    help="diagnose: rank circuit effects by held-out error, give a verdict")
     p.add_argument("--effect", action="append", default=None, metavar="NAME",
@@ -127,6 +137,9 @@ def main(args) -> int:
 
     params = _kv(args.fit, 3)
     fixed = _kv(args.set, 1)
+    if args.time_offset is not None and not math.isfinite(args.time_offset):
+        raise ParameterError(f"--time-offset {args.time_offset}: not a finite time",
+                             hint="the netlist time of the first sample, in seconds")
     if not params:
         raise ParameterError("nothing to fit", hint="add --fit NAME=GUESS:LOW:HIGH")
     data = _recording(args)
@@ -213,7 +226,8 @@ def _run(args, data, build, params, fixed, say):
         diag = diagnose_trace(build, data, params, fixed=fixed,
                               node=args.node, effects=args.effect,
                               train_fraction=args.train_fraction, max_nfev=args.max_nfev,
-                              workers=args.workers, progress=say)
+                              workers=args.workers, progress=say, start_state=args.start,
+                              time_offset=args.time_offset)
         out = diag.to_json()
         fit = diag.final
         text = diag.report()
@@ -229,7 +243,8 @@ def _run(args, data, build, params, fixed, say):
         pool = process_pool(args.workers)
         try:
             fit = fit_trace(build, data, params, fixed=fixed,
-                            node=args.node, max_nfev=args.max_nfev, pool=pool)
+                            node=args.node, max_nfev=args.max_nfev, pool=pool,
+                            start_state=args.start, time_offset=args.time_offset)
         finally:
             if pool is not None:
                 pool.shutdown()

@@ -1,5 +1,5 @@
-"""Options shared by every command that reads a netlist: ``--include-path``, ``--limit``,
-``--strict``."""
+"""Options shared by every command that reads a netlist: ``--include-path``, ``--limit``
+(also on the commands that read none), ``--strict``."""
 from __future__ import annotations
 
 import sys
@@ -10,12 +10,24 @@ def add(parser, strict: bool = True) -> None:
     parser.add_argument("--include-path", action="append", default=[], metavar="DIR",
                         help="a folder .include may also read from (repeatable; also "
                              "PNEUNET_PATH); by default only the netlist's own folder")
-    parser.add_argument("--limit", action="append", default=[], metavar="NAME=N",
-                        help="change a netlist limit, e.g. --limit max_elements=2000000 "
-                             "(names and defaults: docs/netlist.md, 'Limits')")
+    add_limit(parser)
     if strict:
         parser.add_argument("--strict", action="store_true",
                             help="a node with a single connection is an error, not a warning")
+
+
+def add_limit(parser) -> None:
+    """``--limit NAME=N``: the caps on sizes (read with :func:`limits`)."""
+    parser.add_argument("--limit", action="append", default=[], metavar="NAME=N",
+                        help="change a limit, e.g. --limit max_elements=2000000 "
+                             "(names and defaults: docs/netlist.md, 'Limits')")
+
+
+def limits(args):
+    """The limits with the command's ``--limit`` changes (an unknown name is exit 2)."""
+    from ..netlist.limits import DEFAULT
+
+    return DEFAULT.replace(getattr(args, "limit", []))
 
 
 def parse_options(args) -> dict:

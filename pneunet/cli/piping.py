@@ -3,6 +3,10 @@ from __future__ import annotations
 
 import json
 
+from . import netlist_args
+from .numbers import real, whole, within
+from .outputs import output_file
+
 
 def register(subparsers) -> None:
     p = subparsers.add_parser(
@@ -16,7 +20,7 @@ def register(subparsers) -> None:
                     "simulated fill time of the actuators through their tubes. Defaults: the "
                     "paper's Fig. 1B arm as pneunet reads it (docs/soft-robot.md). "
                     "Example: pneunet piping --actuators 8 --length 1m --plot piping.png")
-    p.add_argument("--actuators", "-n", type=int, default=4, help="number of actuators (4)")
+    p.add_argument("--actuators", "-n", type=whole(1), default=4, help="number of actuators (4)")
     p.add_argument("--length", default="1m", help="tube length source to robot (1m)")
     p.add_argument("--spacing", default="0mm",
                    help="distance between neighbouring actuators along the robot (0mm: all "
@@ -31,13 +35,14 @@ def register(subparsers) -> None:
     p.add_argument("--valve", default="axi", help="membrane valve of every design (axi)")
     p.add_argument("--pH", default="496kPa", help="supply pressure (496kPa)")
     p.add_argument("--pL", default="96kPa", help="ambient pressure (96kPa)")
-    p.add_argument("--level", type=float, default=0.9,
+    p.add_argument("--level", type=real(above=0, high=0.999), default=0.9,
                    help="filled: this fraction of the supply's gauge pressure (0.9)")
     p.add_argument("--designs", default="individual,supply+control,demux",
                    help="comma-separated designs to compare (all three)")
-    p.add_argument("--plot", metavar="PNG", default=None, help="write the figure")
+    p.add_argument("--plot", metavar="PNG", default=None, type=output_file(plot=True), help="write the figure")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
     p.add_argument("--quiet", "-q", action="store_true", help="no warnings on stderr")
+    netlist_args.add_limit(p)
     p.set_defaults(func=main)
 
 
@@ -55,6 +60,7 @@ def _quantity(text: str, slot: str, what: str) -> float:
 def main(args) -> int:
     from ..analysis.piping import PipingSpec, piping_study, plot_piping, with_sizes
 
+    within(args.actuators, "--actuators", netlist_args.limits(args), "max_elements")
     spacing = _quantity(args.spacing, "length", "spacing")
     spec = PipingSpec(actuators=args.actuators, length=_quantity(args.length, "length", "length"),
                       positions=tuple(k * spacing for k in range(max(args.actuators, 0))),

@@ -6,6 +6,7 @@ import sys
 from pathlib import Path
 
 from . import netlist_args
+from .outputs import output_folder
 
 
 def register(subparsers) -> None:
@@ -18,7 +19,7 @@ def register(subparsers) -> None:
                     "Exit codes: 0 ok, 2 bad input or a simulation that cannot be "
                     "completed (a result with NaN or inf included).")
     p.add_argument("netlist", metavar="FILE.pn", help="netlist file")
-    p.add_argument("-o", "--output", metavar="DIR", default=None,
+    p.add_argument("-o", "--output", metavar="DIR", default=None, type=output_folder,
                    help="output folder (default: ./<netlist name>_results)")
     p.add_argument("--plot", action="store_true", help="also write a PNG plot per transient")
     p.add_argument("--json", action="store_true",

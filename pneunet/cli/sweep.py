@@ -2,11 +2,14 @@
 from __future__ import annotations
 
 import json
+import math
 import sys
 from pathlib import Path
 
 from . import netlist_args
 from .executors import add_executor_args
+from .numbers import real, whole, within
+from .outputs import output_file
 
 
 def register(subparsers) -> None:
@@ -31,25 +34,25 @@ def register(subparsers) -> None:
                         "NAME=list:a,b,c (repeat for a grid)")
     p.add_argument("--tol", action="append", default=[], metavar="NAME=NOMINAL:PLUSMINUS",
                    help="a tolerance for --lhs/--mc sampling, e.g. X1.pclose=96.42:5")
-    p.add_argument("--lhs", type=int, default=0, metavar="N",
+    p.add_argument("--lhs", type=whole(0), default=0, metavar="N",
                    help="N Latin-hypercube points over the --tol ranges")
-    p.add_argument("--mc", type=int, default=0, metavar="N", help="N Monte Carlo points")
-    p.add_argument("--seed", type=int, default=0, help="random seed for --lhs/--mc")
+    p.add_argument("--mc", type=whole(0), default=0, metavar="N", help="N Monte Carlo points")
+    p.add_argument("--seed", type=whole(0), default=0, help="random seed for --lhs/--mc")
     p.add_argument("--analysis", choices=["regime", "oscillation", "meas"], default=None,
                    help="regime: oscillation + stationary-branch prediction (default for "
                         "oscillators); oscillation: period/duty/extremes; meas: the netlist's "
                         ".meas results (default for netlists with .meas)")
     p.add_argument("--node", default="tank", help="node analysed for oscillation (default tank)")
-    p.add_argument("--t-stop", type=float, default=None, metavar="S",
+    p.add_argument("--t-stop", type=real(above=0, unit=" s"), default=None, metavar="S",
                    help="fixed transient length; default: simulate until the cycle converges")
     add_executor_args(p)
-    p.add_argument("--out", "-o", metavar="CSV", default="sweep.csv",
+    p.add_argument("--out", "-o", metavar="CSV", default="sweep.csv", type=output_file(),
                    help="table to write (default sweep.csv)")
-    p.add_argument("--store", metavar="JSONL", default=None,
+    p.add_argument("--store", metavar="JSONL", default=None, type=output_file(),
                    help="incremental results (default: <out>.jsonl); reruns resume from it")
     p.add_argument("--fresh", action="store_true", help="ignore and replace an existing store")
     p.add_argument("--retry-failed", action="store_true", help="recompute failed points")
-    p.add_argument("--plot", metavar="PNG", default=None,
+    p.add_argument("--plot", metavar="PNG", default=None, type=output_file(plot=True),
                    help="regime map (two axes) or measurement vs parameter (one axis)")
     p.add_argument("--json", action="store_true", help="print a JSON summary with all rows")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -66,7 +69,13 @@ def main(args) -> int:
 
     if bool(args.netlist) == bool(args.circuit):
         raise ParameterError("give a netlist file or --circuit oscillator (not both)")
-    axes = [S.parse_axis(a) for a in args.param]
+    limits = netlist_args.limits(args)
+    axes = [S.parse_axis(a, limits.max_sweep_points) for a in args.param]
+    within(math.prod(len(a.values) for a in axes), "the --param grid", limits,
+           "max_sweep_points")
+    within(args.lhs or args.mc, "--lhs" if args.lhs else "--mc", limits, "max_samples")
+    within(math.prod(len(a.values) for a in axes) * max(args.lhs or args.mc, 1),
+           "the --param grid times the samples", limits, "max_sweep_points")
     dists = {}
     for t in args.tol:
         name, _, spec = t.partition("=")

@@ -13,7 +13,7 @@ from pathlib import Path
 
 from ..analysis import sweep as S
 from .metrics import SpecMeasure
-from .spec import parse_targets
+from .spec import check_meas_targets, parse_targets
 
 #: batches larger than this draw a progress bar (not the Jacobian's few points)
 BAR_MIN_POINTS = 8
@@ -39,6 +39,8 @@ class Problem:
             measures = {m.name: measure_unit(m) for m in deck.measures}
             ambient = deck.circuit.options.ambient
         self.targets = parse_targets(list(targets or ()), measures, ambient)
+        if isinstance(build, S.NetlistBuilder):
+            check_meas_targets(self.targets, {m.name: m.kind for m in deck.measures})
         if not self.targets:
             from ..errors import ParameterError
 

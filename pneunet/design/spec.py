@@ -29,6 +29,14 @@ from ..errors import ParameterError
 BUILTIN = {"period": ("time", "s"), "frequency": ("frequency", "Hz"),
            "duty": ("dimensionless", ""), "swing": ("pressure_difference", "kPa"),
            "p_min": ("pressure", "kPa"), "p_max": ("pressure", "kPa")}
+#: built-in metric -> the values it can take (low, high, low itself allowed)
+DOMAIN = {"period": (0.0, math.inf, False), "frequency": (0.0, math.inf, False),
+          "duty": (0.0, 1.0, True), "swing": (0.0, math.inf, True),
+          "p_min": (0.0, math.inf, False), "p_max": (0.0, math.inf, False)}
+#: .meas kind -> the values it can give
+MEAS_DOMAIN = {"period": DOMAIN["period"], "freq": DOMAIN["frequency"], "pp": DOMAIN["swing"],
+               "risetime": DOMAIN["swing"], "falltime": DOMAIN["swing"],
+               "filltime": DOMAIN["swing"]}
 ALIASES = {"freq": "frequency", "duty_cycle": "duty", "pmin": "p_min", "pmax": "p_max"}
 #: unit of a .meas result -> slot of its target values
 MEAS_SLOTS = {"s": "time", "Hz": "frequency", "kPa": "pressure", "mg/s": "flow",
@@ -140,6 +148,7 @@ def parse_target(text: str, measures: dict | None = None, ambient_kpa: float = 9
         slot, unit, source = BUILTIN[name] + ("builtin",)
     value_text, tol_text = (_PM.split(rhs, maxsplit=1) + [None])[:2]
     value = _quantity(value_text, slot, f"target {text!r}", ambient_kpa)
+    _check_domain(text, name, value, unit, DOMAIN.get(name) if source == "builtin" else None)
     if tol_text is None:
         tol = DEFAULT_REL_TOL * abs(value) if value else 1.0
     elif tol_text.strip().endswith("%"):
@@ -151,6 +160,22 @@ def parse_target(text: str, measures: dict | None = None, ambient_kpa: float = 9
         raise ParameterError(f"target {text!r}: the tolerance must be positive",
                              hint="e.g. period=3s±0.1s or period=3s±5%")
     return Target(name, node, op, float(value), float(tol), unit, source, text.strip())
+
+
+def check_meas_targets(targets, kinds: dict) -> None:
+    """A ParameterError for a target on a ``.meas`` (``kinds``: name -> its kind, e.g.
+    'period') whose value that kind of measurement can never give (``period=-3s``)."""
+    for t in targets:
+        if t.source == "meas":
+            _check_domain(t.text, t.metric, t.value, t.unit, MEAS_DOMAIN.get(kinds.get(t.metric)))
+
+
+def _check_domain(text, name, value, unit, domain) -> None:
+    low, high, closed = domain or (-math.inf, math.inf, True)
+    if not (math.isfinite(value) and (value >= low if closed else value > low) and value <= high):
+        raise ParameterError(f"target {text!r}: {name} = {value:g} {unit} can never be measured",
+                             hint=f"{name} lies in {'[' if closed else '('}{low:g}, {high:g}"
+                                  f"{']' if high < math.inf else ')'} {unit}".rstrip())
 
 
 @dataclass(frozen=True)

@@ -82,6 +82,7 @@ def transient(circuit, t_stop: float, *, t_step: float | None = None, t_start: f
                              f"max_output_points = {limit:.0e})",
                              hint="a larger output step: the integrator's own steps do "
                                   "not depend on it; or a larger max_output_points")
+    _check_corners(circuit, t_start, t_stop, limit)
     wall = _time.perf_counter()
     dae = CircuitDAE(circuit)
     if start == "op":
@@ -195,6 +196,25 @@ def _single_rate(circuit, t_stop, t_step, t_start):
 MAX_OUTPUT_POINTS = 10_000_000
 
 
+def _check_corners(circuit, t_start, t_stop, limit) -> None:
+    """A ParameterError naming the source whose waveform has more corners in
+    (t_start, t_stop) than ``limit`` (each one a stop of the integrator), before any
+    is made: PULSE with a 4 ns period over 10^4 s would be 10^13."""
+    from ..waveforms import Waveform
+
+    for name, spec in circuit.elements.items():
+        for value in spec.params.values():
+            if isinstance(value, Waveform):
+                count = value.corner_count(t_start, t_stop)
+                if count > limit:
+                    raise ParameterError(
+                        f"{value.netlist()} has {count:.3g} corners in {t_stop - t_start:g} s, "
+                        f"each a stop of the integrator (limit max_output_points = "
+                        f"{limit:.0e})", where=name,
+                        hint="a longer period or a shorter transient; or a larger "
+                             "max_output_points (--limit max_output_points=N)")
+
+
 def _sources_only(dae, t_start, t_stop, t_step, wall) -> Solution:
     """The solution of a circuit without unknowns: the sources' pressures and the flows
     they drive, on the output grid (or at the sources' corners), no integrator."""
@@ -202,6 +222,8 @@ def _sources_only(dae, t_start, t_stop, t_step, wall) -> Solution:
                               dae.jumps(t_start, t_stop)])
     times = (np.append(np.arange(t_start, t_stop, t_step), t_stop) if t_step
              else np.unique(corners))
+    jumps = dae.jumps(t_start, t_stop)  # each twice: both sides (solution.left_limits)
+    times = np.sort(np.concatenate([times[~np.isin(times, jumps)], jumps, jumps]))
     stats = dict(backend="none (no unknowns)", steps=0, output_points=len(times),
                  branch_jumps=0, unknowns=0, algebraic=0,
                  wall_time_s=_time.perf_counter() - wall)

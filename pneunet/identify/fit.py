@@ -342,6 +342,10 @@ def _labels(mdot, mdot_min):
     return np.where(mdot > mdot_min, 1, -1)
 
 
+#: the largest SVM slack weight accepted, kPa^-2
+MAX_C = 1000.0
+
+
 def fit_valve(data, *, mdot_min=1.0, C=0.1, correct_threshold=True, n_boot=100, seed=0,
               groups="auto", **load_options) -> ValveFit:
     """Identify the six parameters from static measurements (two stages, eqs. 20–24).
@@ -375,8 +379,10 @@ def fit_valve(data, *, mdot_min=1.0, C=0.1, correct_threshold=True, n_boot=100, 
         raise DataError(f"data lacks column(s) {missing}")
     if len(frame) < 10:
         raise DataError(f"only {len(frame)} points: too few to identify six parameters")
-    if C <= 0:
-        raise ParameterError(f"C must be > 0, got {C}")
+    if not 0 < C <= MAX_C:
+        raise ParameterError(f"C must lie in (0, {MAX_C:g}] kPa^-2, got {C}",
+                             hint="the SVM's time grows with C: 1000 takes ~15 s, inf never "
+                                  "ends; the default 0.1 is the paper's")
     mdot = frame["mdot_mg_s"].to_numpy(float)
     X = frame[list(PRESSURES)].to_numpy(float)
     settings = {"C": C, "correct_threshold": bool(correct_threshold), "n_boot": n_boot,

@@ -21,7 +21,8 @@ class Limits:
     max_includes: int = 1_000             # files included in all, repeats counted
     max_elements: int = 100_000           # elements in the flattened circuit
     max_output_points: int = 10_000_000   # output points of one .tran (t_stop / t_step)
-    max_sweep_points: int = 100_000       # points of one .dc, and of all .step lines together
+    max_sweep_points: int = 100_000       # points of one .dc, all .step lines, one sweep's grid
+    max_samples: int = 100_000            # random samples: --mc, --lhs, --yield, --bootstrap
 
     def replace(self, specs) -> "Limits":
         """These limits with ``NAME=N`` entries (strings or a mapping) changed."""

@@ -1,8 +1,6 @@
 """Run a Deck's analyses and its ``.meas`` statements (used by ``pneunet run``)."""
 from __future__ import annotations
 
-import math
-
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -66,9 +64,10 @@ def run_deck(deck: Deck, progress: bool = False) -> RunResult:
 def run_analysis(deck: Deck, analysis, progress=False):
     circuit = deck.circuit
     if isinstance(analysis, Tran):
-        # its output points were checked against the deck's limits when it was parsed
+        # its output points (and the sources' corners) count against the deck's limits
         return circuit.tran(analysis.t_stop, t_step=analysis.t_step, t_start=analysis.t_start,
-                            progress=progress, max_output_points=math.inf)
+                            progress=progress,
+                            max_output_points=deck.source.limits.max_output_points)
     if isinstance(analysis, Op):
         return circuit.op()
     if isinstance(analysis, DC):

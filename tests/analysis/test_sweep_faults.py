@@ -143,5 +143,5 @@ def test_unwritable_output_is_reported_before_any_work(tmp_path, capsys):
                 "--out", str(tmp_path / "ok.csv"), option, str(target)]
         assert main(args) == 2
         err = capsys.readouterr().err
-        assert "cannot write the" in err and f"{blocker} is a file, not a directory" in err
+        assert f"{blocker} is a file, not a folder: cannot write {target}" in err
         assert not (tmp_path / "ok.csv.jsonl").exists() or option == "--store"

@@ -49,7 +49,12 @@ def test_unreachable_target_reports_closest_design_and_limiting_bound(short_osci
     (["--vary", "Rout=0.6:3", "--target", "perod=3s"], "did you mean 'period'?"),
     (["--vary", "Rout=0.6:3", "--target", "period=3kPa"], "needs s, got kPa"),
     (["--vary", "Rout=0.6:3", "--target", "duty@tnk=0.4"], "did you mean 'tank'?"),
-    (["--vary", "Rout=0.6:3", "--starts", "-3"], "n_start (--starts) must be a whole number ≥ 1"),
+    (["--vary", "Rout=0.6:3", "--starts", "-3"], "argument --starts: -3: must be >= 1"),
+    (["--vary", "Rout=0.6:3", "--target", "period=-3s"], "period = -3 s can never be measured"),
+    (["--vary", "Rout=0.6:3", "--target", "duty=1.5"], "duty lies in [0, 1]"),
+    (["--vary", "Rout=0.6:3", "--yield", "1e9", "--tolerance", "X1.pclose=±5kPa"],
+     "--yield asks for 1e+09 (limit max_samples = 100000)"),
+    (["--vary", "Rout=0.6:3", "--max-evaluations", "inf"], "'inf' is not a whole number"),
 ])
 def test_bad_input_is_exit_2_before_simulating(short_oscillator, capsys, args, message):
     argv = ["design", str(short_oscillator), "--json"] + args
