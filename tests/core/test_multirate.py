@@ -6,6 +6,7 @@ tolerances, a mass balance, or single-oscillator runs.
 """
 from __future__ import annotations
 
+import functools
 import subprocess
 import sys
 from pathlib import Path
@@ -570,6 +571,12 @@ def test_the_multirate_result_does_not_depend_on_passes_over_active_cells(monkey
         np.testing.assert_allclose(sol.pressure(node), whole.pressure(node), rtol=1e-6)
 
 
+@functools.lru_cache(maxsize=1)
+def manifolds_reference():
+    """Single-rate IDA at rtol 1e-8 of the 40-cell manifolds, 3 s (shared by two tests)."""
+    return two_by_two_manifolds("single", 1e-8, 40).tran(3.0, t_step=0.01)
+
+
 def two_by_two_manifolds(method, rtol, n=40):
     """bench_scaling's cells on two supply lines and two exhaust lines of different
     resistances: cell k draws from supply k % 2 and vents into exhaust (k // 2) % 2
@@ -606,7 +613,7 @@ def test_cells_on_different_hub_nodes_are_one_group_and_match_single_rate():
     assert part.groups == [list(range(n))]
     assert {tuple(c.hub_nodes) for c in part.cells} == {
         ("line0", "exh0"), ("line1", "exh0"), ("line0", "exh1"), ("line1", "exh1")}
-    ref = two_by_two_manifolds("single", 1e-8, n).tran(3.0, t_step=0.01)
+    ref = manifolds_reference()
     sol = two_by_two_manifolds("multirate", 1e-6, n).tran(3.0, t_step=0.01)
     assert sol.stats["method"] == "multirate" and sol.stats["groups"] == 1
     nodes = ["line0", "line1", "exh0", "exh1"] + [f"act{k}" for k in range(n)]
@@ -623,7 +630,9 @@ def test_cells_split_over_two_processes_give_the_one_process_result(monkeypatch)
     tolerance: the hub sums the two halves' draws in another order, and an adaptive
     solver turns such round-off into tolerance-sized differences wherever a decision
     sits on its threshold (a 1e-13 relative change of the supply pressure alone moves
-    this run by 1.7e-6; a window accepted one sweep later, by 7e-6)."""
+    this run by 1.7e-6; a window accepted one sweep later, by 7e-6).  The budget is
+    written here (30 local tolerances, docs/numerics.md), not read from the constant
+    under test, and the two-process run also agrees with single-rate IDA at rtol 1e-8."""
     from pneunet.engine import multirate
 
     one = two_by_two_manifolds("multirate", 1e-6).tran(3.0, t_step=0.01)
@@ -633,8 +642,10 @@ def test_cells_split_over_two_processes_give_the_one_process_result(monkeypatch)
     assert two.stats["processes"] == 2 and two.stats["cells"] == 40
     for node in ["line0", "line1", "exh0", "exh1"] + [f"act{k}" for k in range(40)]:
         local = 1e-6 * np.abs(one.pressure(node)) + 1e-6    # rtol = atol = 1e-6
-        assert np.all(np.abs(two.pressure(node) - one.pressure(node))
-                      <= multirate.COUPLING_TOL * local)
+        assert np.all(np.abs(two.pressure(node) - one.pressure(node)) <= 30 * local)
+    ref = manifolds_reference()
+    nodes = ["line0", "line1", "exh0", "exh1"] + [f"act{k}" for k in range(40)]
+    assert max(np.abs(two.pressure(x) - at(two, ref, x)).max() for x in nodes) <= 0.1
     assert abs(two.stats["sweeps"] - one.stats["sweeps"]) <= 2
     assert two.stats["steps"] == pytest.approx(one.stats["steps"], rel=0.05)
 
