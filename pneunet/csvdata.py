@@ -45,8 +45,8 @@ class Table:
     notes: list[str] = field(default_factory=list)
 
 
-def _at(path, line) -> str:
-    return f"{path}:{line}"
+def _at(path, line, column=None) -> str:
+    return f"{path}:{line}" if column is None else f"{path}:{line}:{column}"
 
 
 class CsvFile:
@@ -189,6 +189,8 @@ def _parse(body: str, numbers, columns, numeric, source):
     import pandas as pd
 
     n_fields = len(columns)
+    if '"' in body:
+        _check_quotes(body.split("\n")[:-1], numbers, source)
     if body.count(",") != len(numbers) * (n_fields - 1):
         _check_fields(body.split("\n")[:-1], numbers, n_fields, source)
     try:
@@ -204,8 +206,9 @@ def _parse(body: str, numbers, columns, numeric, source):
     except (ValueError, TypeError):
         frame = pd.read_csv(io.StringIO(body), header=None, names=columns, lineterminator="\n",
                             skipinitialspace=True, dtype={c: str for c in numeric})
+        lines = body.split("\n")
         for c in numeric:
-            frame[c] = _numbers(frame[c], c, numbers, source)
+            frame[c] = _numbers(frame[c], c, numbers, source, columns.index(c), lines)
         return frame
 
 
@@ -267,15 +270,32 @@ def _check_fields(body, numbers, n_fields, source) -> None:
     bad = [i for i in bad if i not in quoted]
     if bad:
         i = bad[0]
-        raise DataError(f"{counts[i]} fields, the header has {n_fields}",
-                        where=_at(source, numbers[i]),
+        where = _at(source, numbers[i], _field_column(body[i], min(counts[i], n_fields + 1) - 1)
+                    if counts[i] > n_fields else len(body[i]) + 1)
+        raise DataError(f"{counts[i]} fields, the header has {n_fields}", where=where,
                         hint="every row needs one value per column (a ragged or cut row; fix "
                              "or delete it)")
 
 
-def _numbers(values, column: str, numbers, source):
+def _check_quotes(body, numbers, source) -> None:
+    """A DataError at the first line whose quotes do not close (a quoted cell holding a
+    line break: each line is one row here)."""
+    for i, text in enumerate(body):
+        if text.count('"') % 2:
+            raise DataError("a quoted cell is not closed on its line (a line break inside "
+                            "quotes?)", where=_at(source, numbers[i], text.rfind('"') + 1),
+                            hint="one row per line: remove the line break and the quotes")
+
+
+def _field_column(text: str, index: int) -> int:
+    """1-based character column where field ``index`` (0-based) of a line starts."""
+    return len(",".join(text.split(",")[:index])) + (2 if index else 1)
+
+
+def _numbers(values, column: str, numbers, source, index: int = 0, lines=()):
     """``values`` (strings) as float; DataError at the first text that is not a number
-    (an empty cell or NA/NaN is NaN, inf and 1e999 are inf: the caller's rules)."""
+    (an empty cell or NA/NaN is NaN, inf and 1e999 are inf: the caller's rules), at its
+    line and column (``index``: the column's field, ``lines``: the data lines)."""
     import numpy as np
 
     import pandas as pd
@@ -286,8 +306,10 @@ def _numbers(values, column: str, numbers, source):
         text &= ~np.isin(values.to_numpy(dtype=object), np.array(_NA_WORDS, dtype=object))
     if text.any():
         i = int(np.flatnonzero(text)[0])
-        raise DataError(f"column {column}: {values.iloc[i]!r} is not a number",
-                        where=_at(source, numbers[i]),
+        where = _at(source, numbers[i], _field_column(lines[i], index)) if len(lines) > i \
+            else _at(source, numbers[i])
+        raise DataError(f"column {column} (field {index + 1}): {values.iloc[i]!r} is not a "
+                        "number", where=where,
                         hint="only numbers in data columns, '.' as decimal point, no units in "
                              "the cells")
     return out

@@ -17,6 +17,11 @@ VALVE_PARAMETERS = {
 }
 
 
+#: Rf accepted, kPa*s/mg; |pclose|, |ptrans| at most, kPa; ptrans - pclose at least, kPa
+#: (beyond these the laws' products underflow or overflow: Rf = 1e-90 divided by zero)
+RF_RANGE, MAX_PRESSURE, MIN_SPAN = (1e-6, 1e6), 1e5, 1e-6
+
+
 @dataclass(frozen=True)
 class ValveParams:
     """Six-parameter membrane valve model (MODEL.md eqs. 10–19).
@@ -43,11 +48,18 @@ class ValveParams:
             if not isinstance(v, (int, float)) or not math.isfinite(v):
                 raise ParameterError(f"parameter {f.name} must be a finite number, got {v!r}",
                                      where=where)
-        if self.Rf <= 0:
-            raise ParameterError(f"Rf must be > 0 kPa*s/mg, got {self.Rf}", where=where)
-        if self.ptrans <= self.pclose:
+        if not RF_RANGE[0] <= self.Rf <= RF_RANGE[1]:
+            raise ParameterError(f"Rf must lie in [{RF_RANGE[0]:g}, {RF_RANGE[1]:g}] kPa*s/mg, "
+                                 f"got {self.Rf:g}", where=where,
+                                 hint="the paper's valves have 0.3-1 kPa*s/mg")
+        for key in ("pclose", "ptrans"):
+            if abs(getattr(self, key)) > MAX_PRESSURE:
+                raise ParameterError(f"{key} must lie within ±{MAX_PRESSURE:g} kPa, got "
+                                     f"{getattr(self, key):g}", where=where)
+        if self.ptrans - self.pclose < MIN_SPAN:
             raise ParameterError(
-                f"ptrans ({self.ptrans} kPa) must be greater than pclose ({self.pclose} kPa)",
+                f"ptrans ({self.ptrans} kPa) must be greater than pclose ({self.pclose} kPa)"
+                f" by {MIN_SPAN:g} kPa at least",
                 where=where, hint="ptrans is the Δp at which the valve is 71 % open")
         if not 0.1 <= self.e <= 10:
             raise ParameterError(f"e must lie in [0.1, 10], got {self.e}", where=where)

@@ -53,11 +53,26 @@ def _load_plugin(spec):
         path = Path(spec)
         if not path.exists():
             raise ParameterError(f"plugin file {spec} not found")
+        if not path.is_file():
+            raise ParameterError(f"plugin {spec} is not a file")
         mod_spec = importlib.util.spec_from_file_location(path.stem, path)
         module = importlib.util.module_from_spec(mod_spec)
-        mod_spec.loader.exec_module(module)
-        return module
-    return importlib.import_module(spec)
+        load = lambda: mod_spec.loader.exec_module(module)  # noqa: E731
+    else:
+        load = lambda: importlib.import_module(spec)  # noqa: E731
+    try:
+        return load() or module
+    except ModuleNotFoundError as err:
+        if err.name and spec.startswith(err.name):
+            raise ParameterError(f"--plugin {spec}: no module named {err.name!r}",
+                                 hint="a module on the Python path, or a file ending in .py"
+                                 ) from None
+        raise ParameterError(f"--plugin {spec}: {err}") from None
+    except (ImportError, ValueError, TypeError) as err:  # "..x", "", a broken module name
+        raise ParameterError(f"--plugin {spec}: cannot import it ({err})") from None
+    except SyntaxError as err:
+        raise ParameterError(f"--plugin {spec}: {err.msg}",
+                             where=f"{err.filename}:{err.lineno}") from None
 
 
 def run(args) -> int:

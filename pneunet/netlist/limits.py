@@ -9,6 +9,10 @@ from dataclasses import dataclass
 from ..errors import ParameterError
 
 
+#: the most a limit can be raised to: nesting that is read by recursion
+CEILINGS = {"max_subckt_depth": 150, "max_include_depth": 150}
+
+
 @dataclass(frozen=True)
 class Limits:
     """Caps on a netlist's size and on the work it asks for (defaults in docs/netlist.md)."""
@@ -23,6 +27,14 @@ class Limits:
     max_output_points: int = 10_000_000   # output points of one .tran (t_stop / t_step)
     max_sweep_points: int = 100_000       # points of one .dc, all .step lines, one sweep's grid
     max_samples: int = 100_000            # random samples: --mc, --lhs, --yield, --bootstrap
+
+    def __post_init__(self):
+        for name, ceiling in CEILINGS.items():
+            if getattr(self, name) > ceiling:
+                raise ParameterError(f"limit {name} can be at most {ceiling}, got "
+                                     f"{getattr(self, name)}",
+                                     hint="each level is a few frames of Python's stack, which "
+                                          "holds about 1000")
 
     def replace(self, specs) -> "Limits":
         """These limits with ``NAME=N`` entries (strings or a mapping) changed."""

@@ -67,7 +67,7 @@ def test_bellows_from_csv_fills_as_its_stored_mass_says(tmp_path, kind):
 @pytest.mark.parametrize("text, message", [
     ("p,V_mL\n100,20\n200,30\n", r"bellows.csv: column p names no unit"),
     ("p_kPa,V_mL,x\n100,20,1\n200,30,1\n", r"bellows.csv: a table has two columns, found 3"),
-    ("p_kPa,V_mL\n100,20\n200,abc\n", r"bellows.csv:3: column V_mL: 'abc' is not a number"),
+    ("p_kPa,V_mL\n100,20\n200,abc\n", r"bellows.csv:3:5: column V_mL \(field 2\): 'abc' is not a number"),
     ("p_kPa,V_mL\n100,20\n", r"bellows.csv: a table needs at least two rows"),
     ("p_kPa,V_s\n100,20\n200,30\n", r"column V_s: .*a volume column in mL"),
     ("p_kPa,V_mL\n100,20\n200,nan\n", r"bellows.csv:3: column V_mL is not a finite number"),
