@@ -10,8 +10,8 @@ from dataclasses import dataclass
 
 STANDARD_ATMOSPHERE_KPA = 101.325
 NORMAL_TEMPERATURE_K = 273.15  # DIN 1343 normal conditions: 0 °C, 101.325 kPa
-ROOM_TEMPERATURE_K = 293.15
-GAS_CONSTANT = 8.314  # J/(mol·K) == kPa·L/(mol·K)
+ROOM_TEMPERATURE_K = 293.15  # the default gas temperature (.options temperature=)
+GAS_CONSTANT = 8.314462618  # J/(mol·K) == kPa·L/(mol·K), CODATA 2018 (exact: N_A·k_B)
 
 
 @dataclass(frozen=True)

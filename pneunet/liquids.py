@@ -18,6 +18,12 @@ class Liquid:
     viscosity: float      # Pa·s
     bulk_modulus: float   # kPa
 
+    @property
+    def normal_density_mg_ml(self) -> float:
+        """The density a volume flow of this liquid is converted with, mg/mL: its own
+        (``1L/min`` of water is a litre of water; see :func:`pneunet.units.to_internal`)."""
+        return self.density
+
 
 #: water at 20 °C; ISO VG 32 hydraulic oil at 40 °C (32 mm²/s)
 WATER = Liquid("water", 998.2, 1.002e-3, 2.18e6)

@@ -10,7 +10,8 @@ conventions go beyond plain unit conversion:
   when converting to an absolute pressure;
 * **normal volume flow** — a volume flow (``40L/min``, ``slpm``) in a mass-flow
   slot means litres at normal conditions (0 °C, 101.325 kPa) and is converted
-  with the gas's normal density.
+  with the gas's normal density; in a liquid circuit it is the liquid's own volume
+  (``gas`` is then a :class:`~pneunet.liquids.Liquid`; ``slpm``/``sccm`` refused).
 """
 from __future__ import annotations
 
@@ -20,6 +21,7 @@ from dataclasses import dataclass
 
 from .errors import ParameterError
 from .gas import AIR, STANDARD_ATMOSPHERE_KPA, Gas
+from .liquids import Liquid
 
 #: slot -> (internal unit, pint dimensionality written as a unit of that slot)
 SLOTS = {
@@ -97,11 +99,12 @@ def split_quantity(text: str) -> Quantity:
 
 
 def to_internal(value, unit: str, slot: str, *, gauge: bool = False,
-                ambient_kpa: float = STANDARD_ATMOSPHERE_KPA, gas: Gas = AIR,
+                ambient_kpa: float = STANDARD_ATMOSPHERE_KPA, gas: Gas | Liquid = AIR,
                 name: str = "value"):
     """Convert ``value`` (scalar or array) given in ``unit`` to the slot's internal unit.
 
-    ``name`` is used in error messages ("Rout: R needs kPa·s/mg, got kPa").
+    ``name`` is used in error messages ("Rout: R needs kPa·s/mg, got kPa"); ``gas`` gives
+    the density of a volume flow in a flow slot (a Gas: normal litres; a Liquid: its own).
     """
     if slot not in SLOTS:
         raise ValueError(f"unknown slot {slot!r}")
@@ -135,6 +138,11 @@ def _convert(value, unit, target, slot, gas, name):
     except pint.errors.DimensionalityError:
         pass
     if slot == "flow" and q.check("[volume]/[time]"):
+        if isinstance(gas, Liquid) and any(u in unit for u in ("slpm", "sccm")):
+            raise ParameterError(f"{name}: {unit} is a gas unit (standard litres), and this "
+                                 f"circuit holds {gas.name}",
+                                 hint=f"a volume flow of {gas.name} is written in L/min or "
+                                      "mL/s (its own litres), or give the mass flow in g/s")
         normal_ml_s = q.to("mL/s").magnitude
         return normal_ml_s * gas.normal_density_mg_ml
     raise ParameterError(f"{name} needs {pretty(target)}, got {unit}",

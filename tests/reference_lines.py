@@ -6,7 +6,7 @@ f = 0.0791·Re^(−1/4)) mass flows, blended as docs/netlist.md documents for ``
 """
 import numpy as np
 
-R_AIR = 8.314 / 28.965e-3   # J/(kg·K)
+R_AIR = 8.314462618 / 28.965e-3   # J/(kg·K)
 T = 293.15                  # K, pneunet's default temperature
 MU = 1.813e-5               # Pa·s, air at 20 °C
 

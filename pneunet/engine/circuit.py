@@ -103,7 +103,7 @@ class Circuit:
 
                 out[key] = read_table(value, family.table_slots, strict=True,
                                       ambient_kpa=self.options.ambient,
-                                      gas=self.options.gas_model)
+                                      gas=self.options.volume_flow_fluid)
             elif spec.kind == "table":
                 out[key] = value
             elif spec.kind == "waveform" and (isinstance(value, Waveform) or callable(value)):
@@ -120,7 +120,7 @@ class Circuit:
                 q = split_quantity(value)
                 return float(to_internal(q.magnitude, q.unit, slot, gauge=q.gauge,
                                          ambient_kpa=self.options.ambient,
-                                         gas=self.options.gas_model, name=name))
+                                         gas=self.options.volume_flow_fluid, name=name))
             except ParameterError as err:
                 raise ParameterError(err.message, where=where, hint=err.hint) from None
         try:

@@ -74,7 +74,8 @@ def transient(circuit, dae: CircuitDAE, part: Partition, t_stop: float, t_step: 
     opts = circuit.options
     times = (np.append(np.arange(t_start, t_stop, t_step)[1:], t_stop) if t_step else
              np.linspace(t_start, t_stop, DEFAULT_OUTPUTS + 1)[1:])
-    times = np.concatenate([[t_start], times])
+    jumps = dae.jumps(t_start, t_stop)  # each twice: both sides (solution.left_limits)
+    times = np.sort(np.concatenate([[t_start], times[~np.isin(times, jumps)], jumps, jumps]))
     alone = [c for c in part.cells if any(n in algebraic for n in c.nodes)]
     batched = [ids for ids in part.groups
                if not any(n in algebraic for n in part.cells[ids[0]].nodes)]
@@ -495,7 +496,7 @@ def _samples(T, H, m, outputs):
     """The sample times (s) of the window [T, T + H]: its ends, the ``outputs`` inside
     (the draw is known there exactly) and, between consecutive ones further apart than
     H/m, evenly spaced points at most H/m apart."""
-    inside = outputs[(outputs > T + 1e-9 * H) & (outputs < T + H - 1e-9 * H)]
+    inside = np.unique(outputs[(outputs > T + 1e-9 * H) & (outputs < T + H - 1e-9 * H)])
     knots = np.concatenate([[T], inside, [T + H]])
     gaps = np.diff(knots)
     pieces = np.maximum(np.ceil(gaps * (m / H) - 1e-9), 1).astype(int)

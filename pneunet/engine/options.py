@@ -74,6 +74,12 @@ class SimulationOptions:
         return GASES.get(self.gas.lower(), AIR)
 
     @property
+    def volume_flow_fluid(self) -> Gas | Liquid:
+        """What a volume flow (``1L/min``) in a flow slot is a volume of: the liquid of a
+        liquid circuit (its own litres), else the gas (normal litres)."""
+        return self.liquid or self.gas_model
+
+    @property
     def liquid(self) -> Liquid | None:
         """The circuit's liquid, or None for a gas circuit."""
         return LIQUIDS.get(self.fluid.lower())

@@ -88,7 +88,7 @@ class LazySignals(Mapping):
         return name in self._values or name in self._pending
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class Solution(Summarized):
     """A transient result: time points and named signals (read-only arrays).
 
@@ -114,6 +114,20 @@ class Solution(Summarized):
             object.__setattr__(self, "signals", _freeze(self.signals))
         object.__setattr__(self, "units", MappingProxyType(dict(self.units)))
         object.__setattr__(self, "stats", MappingProxyType(dict(self.stats)))
+
+    def __eq__(self, other) -> bool:
+        """Equal when the times, the signals (names, units and values; NaN equals NaN), the
+        title and the jumps are: what was simulated, not how (``stats`` not compared)."""
+        if not isinstance(other, Solution):
+            return NotImplemented
+        return (self.title == other.title and tuple(self.jumps) == tuple(other.jumps)
+                and dict(self.units) == dict(other.units)
+                and list(self.signals) == list(other.signals)
+                and np.array_equal(self.t, other.t)
+                and all(np.array_equal(self.signals[k], other.signals[k], equal_nan=True)
+                        for k in self.signals))
+
+    __hash__ = None  # mutable-looking arrays inside: not hashable
 
     def __getitem__(self, name: str) -> np.ndarray:
         try:
@@ -270,7 +284,8 @@ def build_solution(dae, times, states, stats, branch_jumps) -> Solution:
 
     states = states.reshape(len(times), dae.n)
     states.setflags(write=False)  # the pressure signals are views of it, handed over uncopied
-    history = functools.cache(lambda: dae.full_pressures(times, states))
+    inputs_at = left_limits(times)
+    history = functools.cache(lambda: dae.full_pressures(inputs_at, states))
     ready, units, pending = {}, {}, {}
     for i, name in enumerate(dae.node_names):
         if name not in dae.state_nodes:  # an element's own state: in its signals
@@ -284,13 +299,28 @@ def build_solution(dae, times, states, stats, branch_jumps) -> Solution:
     sources = [f"mdot_{name}" for name in dae.pinned_sources()]
 
     def source_flows():
-        return {f"mdot_{name}": flow for name, flow in dae.source_flows(times, history()).items()}
+        return {f"mdot_{name}": flow for name, flow in dae.source_flows(inputs_at, history()).items()}
     pending.update(dict.fromkeys(sources, source_flows))
     units.update(dict.fromkeys(sources, "mg/s"))
-    for names, signal_units, compute in dae.element_signal_groups(times, states, history):
+    for names, signal_units, compute in dae.element_signal_groups(inputs_at, states, history):
         pending.update(dict.fromkeys(names, compute))
         units.update(zip(names, signal_units))
     ordered = {k: pending[k] for k in fixed}  # node pressures first, as before
     ordered.update((k, v) for k, v in pending.items() if k not in ordered)
     return Solution(times, LazySignals(ready, ordered), units, stats, dae.circuit.title,
                     branch_jumps)
+
+
+def left_limits(times: np.ndarray) -> np.ndarray:
+    """The times at which the sources are evaluated for each row: a row followed by one at
+    the same time (the two sides of a jump) takes the inputs just before it (the next
+    float below), so that both sides of every source discontinuity are kept."""
+    times = np.asarray(times, dtype=float)
+    if times.size < 2:
+        return times
+    before = np.append(times[1:] == times[:-1], False)
+    if not before.any():
+        return times
+    out = times.copy()
+    out[before] = np.nextafter(times[before], -np.inf)
+    return out

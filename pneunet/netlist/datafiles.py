@@ -31,9 +31,10 @@ def read_data_file(item, policy, slots, options, label, *, strict):
         raise _err(f"{label} expects a file name", item, 'e.g. "curve.csv"')
     name = item.span.file
     base = Path(os.path.realpath(name)).parent if name != "<netlist>" else policy.roots[0]
-    path = policy.resolve(item, base)
     try:
-        return read_table(path, slots, ambient_kpa=options.ambient, gas=options.gas_model,
-                          strict=strict)
+        with policy.open(item, base) as opened:  # read as opened: never reopened by name
+            return read_table(opened.reader, slots, source=str(opened.path),
+                              ambient_kpa=options.ambient, gas=options.volume_flow_fluid,
+                              strict=strict)
     except DataError as err:
         raise _err(f"{label}: {err.where}: {err.message}", item, err.hint) from None

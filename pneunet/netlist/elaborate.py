@@ -244,7 +244,7 @@ class _Builder(ModelCards, AnalysisStatements, MeasureStatements):
                            "write a number with its unit, e.g. " + _example(slot))
             return value
         value = check_number(convert(text, slot, word.span, name=name, ambient=opts.ambient,
-                                     gas=opts.gas_model), text, word.span, name)
+                                     gas=opts.volume_flow_fluid), text, word.span, name)
         if options is None:
             self.converted[text, slot] = value
         return value

@@ -19,7 +19,7 @@ from pneunet.netlist.runner import run_deck
 
 AMBIENT = 100.0
 G = 9.81
-RHO1 = 28.965 / (8.314 * 293.15)  # mg/(kPa·mL): air at 20 °C, per kPa
+RHO1 = 28.965 / (8.314462618 * 293.15)  # mg/(kPa·mL): air at 20 °C, per kPa
 L0, D0, THETA0 = 200.0, 12.0, 25.0  # mm, mm, degrees
 
 

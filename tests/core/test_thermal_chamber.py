@@ -13,7 +13,7 @@ from scipy.integrate import solve_ivp
 
 from pneunet import Circuit
 
-M_AIR, R_GAS = 28.965, 8.314  # g/mol, J/(mol K)
+M_AIR, R_GAS = 28.965, 8.314462618  # g/mol, J/(mol K)
 GAMMA, T_WALL, P_AMB, BAND = 1.4, 293.15, 100.0, 10.0
 V, TAU, R1, R2, P_SUPPLY = 50.0, 0.3, 1.0, 2.0, 400.0
 

@@ -16,7 +16,7 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 M_AIR = 28.965  # g/mol
-R_GAS = 8.314  # J/(mol K)
+R_GAS = 8.314462618  # J/(mol K), CODATA
 T_WALL = 293.15  # K
 GAMMA = 1.4
 AXI = {"Rf": 0.566, "pclose": 96.42, "ptrans": 155.1, "e": 1.99, "ain": 0.32, "aout": 0.71}
