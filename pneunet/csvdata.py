@@ -53,9 +53,9 @@ class CsvFile:
     """A CSV file whose header has been read: ``columns`` (names stripped),
     ``header_line`` (1-based), ``source`` (the path as given)."""
 
-    def __init__(self, path):
+    def __init__(self, path, source: str | None = None):
         self.path = Path(path)
-        self.source = str(path)
+        self.source = str(path) if source is None else source
         if not self.path.exists():
             raise DataError("no such file", where=self.source, hint="check the path")
         if not self.path.is_file():
@@ -212,9 +212,10 @@ def _parse(body: str, numbers, columns, numeric, source):
         return frame
 
 
-def open_csv(path) -> CsvFile:
-    """The CSV at ``path`` with its header read and checked (see :class:`CsvFile`)."""
-    return CsvFile(path)
+def open_csv(path, source: str | None = None) -> CsvFile:
+    """The CSV at ``path`` with its header read and checked (see :class:`CsvFile`);
+    messages name ``source`` (default ``path``)."""
+    return CsvFile(path, source)
 
 
 def _decode(data: bytes, source, first_line: int) -> str:

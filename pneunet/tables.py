@@ -16,10 +16,11 @@ from .units import GAUGE_UNITS, SLOTS, pretty, to_internal
 
 
 def read_table(path, slots: tuple[str, str], *, ambient_kpa: float, gas,
-               strict: bool = False) -> tuple[np.ndarray, np.ndarray]:
+               strict: bool = False, source: str | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The two columns of ``path`` in the internal units of ``slots`` (e.g. ('time',
-    'pressure')), as float arrays of at least two rows."""
-    csv = open_csv(path)
+    'pressure')), as float arrays of at least two rows; messages name ``source`` (default
+    ``path``)."""
+    csv = open_csv(path, source)
     if len(csv.columns) != 2:
         raise DataError(f"a table has two columns, found {len(csv.columns)}: "
                         + ", ".join(csv.columns), where=csv.source,

@@ -3,7 +3,9 @@
 A name is resolved relative to the including file, then in each folder of the search path
 (``--include-path``, then ``PNEUNET_PATH``).  After symbolic links are resolved, the file must
 lie under the top netlist's folder or a search-path folder and be a regular file; absolute
-names, over-long names and files elsewhere are errors at the ``.include`` line.
+names, over-long names and files elsewhere are errors at the ``.include`` line.  A file is opened once and
+what was opened is checked (:meth:`IncludePolicy.open`), never checked by name and then
+opened again: a folder swapped for a symbolic link meanwhile cannot lead outside.
 """
 from __future__ import annotations
 
@@ -37,9 +39,32 @@ class IncludePolicy:
     def allows(self, path: Path) -> bool:
         return any(path == root or path.is_relative_to(root) for root in self.roots)
 
+    def open(self, item, base: Path) -> "Opened":
+        """The file ``item`` names, found as :meth:`resolve` finds it, opened once; then what
+        was opened (the descriptor's own path) is checked, so that a folder swapped for a
+        symbolic link between the check and the open cannot lead outside the roots."""
+        path = self.resolve(item, base)
+        try:
+            fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK
+                         | getattr(os, "O_CLOEXEC", 0))
+        except OSError as exc:
+            raise NetlistError(f"cannot open included {_short(item.text)!r}: "
+                               f"{exc.strerror or exc}", span=item.span,
+                               hint="was it changed while pneunet ran?") from None
+        opened = Opened(fd, path)
+        real = opened.real_path()
+        if not stat.S_ISREG(os.fstat(fd).st_mode) or real is None or not self.allows(real):
+            opened.close()
+            raise NetlistError(f"include {_short(item.text)!r} changed while it was opened "
+                               f"and now leads outside the allowed folders (to "
+                               f"{_short(str(real))})", span=item.span,
+                               hint="a folder on the way was replaced by a symbolic link")
+        return opened
+
     def resolve(self, item, base: Path) -> Path:
         """The file ``item`` names, found from ``base`` (the including file's folder) or the
-        search path; an error at ``item`` if the policy forbids it.  Nothing is opened."""
+        search path; an error at ``item`` if the policy forbids it.  Nothing is opened
+        (:meth:`open` opens it and checks what it opened)."""
         name = item.text
         rule = "includes must stay under " + " or ".join(str(r) for r in self.roots)
         if len(name) > MAX_NAME or any(len(part) > 255 for part in name.split("/")):
@@ -79,6 +104,42 @@ class IncludePolicy:
                            (", then the search path" if len(self.roots) > 1 else ""))
 
 
+class Opened:
+    """A file opened by :meth:`IncludePolicy.open` (a context manager that closes it):
+    ``path`` its name when checked, ``reader`` a name that reads the very file opened
+    (``/proc/self/fd/N`` on Linux, else ``path``)."""
+
+    def __init__(self, fd: int, path: Path):
+        self.fd, self.path = fd, path
+        proc = Path(f"/proc/self/fd/{fd}")
+        self.reader = proc if proc.exists() else path
+
+    def real_path(self) -> Path | None:
+        """Where the descriptor's file lies now (its inode's path), or None if unknown."""
+        if self.reader == self.path:
+            return Path(os.path.realpath(self.path))
+        try:
+            return Path(os.readlink(self.reader))
+        except OSError:
+            return None
+
+    def read_bytes(self) -> bytes:
+        os.lseek(self.fd, 0, os.SEEK_SET)
+        with os.fdopen(os.dup(self.fd), "rb") as fh:
+            return fh.read()
+
+    def close(self) -> None:
+        if self.fd >= 0:
+            os.close(self.fd)
+            self.fd = -1
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
 def _short(text: str, width: int = 80) -> str:
     return text if len(text) <= width else text[:width - 1] + "…"
 
@@ -104,22 +165,24 @@ def expand(src: SourceText, policy: IncludePolicy, limits: Limits = DEFAULT,
                                hint=limits.hint("max_include_depth"))
         base = Path(os.path.realpath(src.name)).parent if src.name != "<netlist>" \
             else policy.roots[0]
-        target = policy.resolve(item, base)
+        opened = policy.open(item, base)
+        target = opened.path
         files = [Path(os.path.realpath(src.name))] if src.name != "<netlist>" else []
         files += [path for path, _ in chain]
-        if target in files:
-            loop = " -> ".join(p.name for p in [*reversed(files), target])
-            raise NetlistError(f"recursive .include: {loop}", span=item.span)
-        count[0] += 1
-        if count[0] > limits.max_includes:
-            raise NetlistError(f"more than {limits.max_includes} files included in all, repeats "
-                               f"counted ({limits.exceeded('max_includes')})", span=item.span,
-                               hint=limits.hint("max_includes"))
-        via = (str(st.span).rsplit(":", 1)[0], *item.span.via)
-        try:
-            included = read_source(target, limits=limits, via=via)
-        except NetlistError as err:
-            if err.span is not None:
-                raise
-            raise NetlistError(err.message, span=item.span, hint=err.hint) from None  # unreadable
+        with opened:
+            if target in files:
+                loop = " -> ".join(p.name for p in [*reversed(files), target])
+                raise NetlistError(f"recursive .include: {loop}", span=item.span)
+            count[0] += 1
+            if count[0] > limits.max_includes:
+                raise NetlistError(f"more than {limits.max_includes} files included in all, "
+                                   f"repeats counted ({limits.exceeded('max_includes')})",
+                                   span=item.span, hint=limits.hint("max_includes"))
+            via = (str(st.span).rsplit(":", 1)[0], *item.span.via)
+            try:
+                included = read_source(target, limits=limits, via=via, opened=opened)
+            except NetlistError as err:
+                if err.span is not None:
+                    raise
+                raise NetlistError(err.message, span=item.span, hint=err.hint) from None
         yield from expand(included, policy, limits, ((target, st.span), *chain), count)

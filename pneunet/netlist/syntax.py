@@ -219,16 +219,20 @@ def _item(node, name, lines, span_of) -> Item:
     raise AssertionError(kind)  # pragma: no cover
 
 
-def read_source(path: Path, *, limits=None, via: tuple = ()) -> SourceText:
+def read_source(path: Path, *, limits=None, via: tuple = (), opened=None) -> SourceText:
     """The parsed netlist file: UTF-8, with or without a byte-order mark; a folder, a
-    device or a pipe is refused before it is opened (``/dev/zero`` never ends)."""
+    device or a pipe is refused before it is opened (``/dev/zero`` never ends).  An
+    included file is read from ``opened`` (:class:`.includes.Opened`), named ``path``."""
     import stat
 
     try:
-        if not stat.S_ISREG(path.stat().st_mode):
+        if opened is not None:
+            raw = opened.read_bytes()
+        elif not stat.S_ISREG(path.stat().st_mode):
             raise NetlistError(f"{path} is not a regular file (a folder, device or pipe)",
                                where=str(path), hint="name a netlist file")
-        raw = path.read_bytes()
+        else:
+            raw = path.read_bytes()
     except OSError as exc:
         raise NetlistError(f"cannot read {path}: {exc.strerror or exc}", where=str(path)) \
             from None

@@ -144,3 +144,91 @@ def test_includes_that_double_at_every_level_are_bounded(project):
         parse_file(project / "n0.pn")
     assert "more than 1000 files included in all, repeats counted (limit max_includes = 1000)" \
         in info.value.message
+
+
+def _swap_setup(tmp_path):
+    """home/real/{secret.pn,secret.csv} inside, outside/ with files of the same names whose
+    element and values must never be read; home/top.pn includes and reads both."""
+    home, outside = tmp_path / "home", tmp_path / "outside"
+    (home / "real").mkdir(parents=True)
+    outside.mkdir()
+    (home / "real" / "secret.pn").write_text("R_INSIDE a atm 1\n")
+    (outside / "secret.pn").write_text("R_OUTSIDE a atm 1\n")
+    (home / "real" / "secret.csv").write_text("time_s,p_kPa\n0,200\n1,200\n")
+    (outside / "secret.csv").write_text("time_s,p_kPa\n0,777\n1,777\n")
+    top = home / "top.pn"
+    top.write_text('P1 a 200kPa\nV1 a 1mL\n.include "real/secret.pn"\n'
+                   'P2 b PWL(FILE="real/secret.csv")\nR2 b atm 1\nV2 b 1mL\n')
+    return home, outside, top
+
+
+def _swap(home, outside):
+    """real/ becomes a symbolic link to outside/ (the folder kept as real.bak)."""
+    os.rename(home / "real", home / "real.bak")
+    os.symlink(outside, home / "real")
+
+
+def _unswap(home):
+    os.unlink(home / "real")
+    os.rename(home / "real.bak", home / "real")
+
+
+def _outcome(top):
+    try:
+        deck = parse_file(top)
+    except NetlistError as err:
+        assert "777" not in err.report() and "R_OUTSIDE" not in err.report(), err.report()
+        return "refused"
+    assert "R_OUTSIDE" not in deck.circuit.elements
+    assert deck.circuit.elements["P2"].params["value"].value(0.5) == pytest.approx(200.0)
+    return "inside"
+
+
+@pytest.mark.parametrize("kind", [".include", "PWL(FILE=)"])
+def test_a_folder_swapped_between_check_and_open_is_caught_by_what_was_opened(tmp_path,
+                                                                               monkeypatch, kind):
+    """The race made deterministic: real/ is swapped for a link to outside/ right after
+    the name was checked.  What was opened is outside, so it is refused; reading it again by
+    name (the old way) loaded R_OUTSIDE or quoted a cell of outside/secret.csv."""
+    from pneunet.netlist.includes import IncludePolicy
+
+    home, outside, top = _swap_setup(tmp_path)
+    resolve = IncludePolicy.resolve
+
+    def resolve_then_swap(self, item, base):
+        path = resolve(self, item, base)
+        if item.text.endswith(".pn" if kind == ".include" else ".csv"):
+            _swap(home, outside)
+        return path
+
+    monkeypatch.setattr(IncludePolicy, "resolve", resolve_then_swap)
+    with pytest.raises(NetlistError, match="changed while it was opened and now leads "
+                                           "outside|cannot open included") as info:
+        parse_file(top)
+    assert "777" not in info.value.report()
+
+
+def test_a_folder_swapped_for_a_link_in_a_loop_never_leads_outside(tmp_path):
+    """A thread swaps real/ for a symbolic link to outside/ and back, as fast as it can,
+    while the netlist is read 150 times: each read gets the inside files or is refused."""
+    import threading
+    import time
+
+    home, outside, top = _swap_setup(tmp_path)
+    stop = threading.Event()
+
+    def swapper():
+        while not stop.is_set():
+            _swap(home, outside)
+            time.sleep(0.0005)
+            _unswap(home)
+            time.sleep(0.001)
+
+    thread = threading.Thread(target=swapper, daemon=True)
+    thread.start()
+    try:
+        outcomes = [_outcome(top) for _ in range(100)]
+    finally:
+        stop.set()
+        thread.join()
+    assert set(outcomes) <= {"inside", "refused"} and "inside" in outcomes

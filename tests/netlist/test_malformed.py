@@ -109,7 +109,7 @@ def test_output_file_in_the_way_and_absurd_output_grid_exit_2(capsys, tmp_path):
     blocker = tmp_path / "file"
     blocker.write_text("")
     assert main(["run", str(net), "-o", str(blocker), "-q"]) == 2
-    assert "a file of that name exists" in capsys.readouterr().err
+    assert f"{blocker} is a file; name a folder" in capsys.readouterr().err
     net.write_text("P1 a 200kPa\nR1 a atm 1\nV1 a 10mL\n.tran 1e-9 30s\n")
     assert main(["run", str(net), "-o", str(tmp_path / "out"), "-q"]) == 2
     err = capsys.readouterr().err
