@@ -34,6 +34,29 @@ def read_store(path) -> dict:
     return done
 
 
+def fingerprint(build, analysis) -> str:
+    """A digest of what sets a point's result besides its parameters: the circuit (a
+    netlist elaborated with its defaults, so every included file, table, .model, analysis
+    and .meas line counts), the analysis and its settings, and pneunet's version.  A store
+    record with another fingerprint is not reused."""
+    import hashlib
+
+    from .. import __version__
+
+    deck = getattr(build, "deck", None)
+    if deck is not None:
+        circuit = deck().to_netlist() + repr(sorted(getattr(build, "options", {}).items()))
+    else:
+        circuit = f"{getattr(build, '__module__', '')}.{getattr(build, '__qualname__', '')}"
+        circuit = circuit if circuit != "." else repr(build)
+    settings = {k: v for k, v in sorted(vars(analysis).items()) if k != "builder"} \
+        if hasattr(analysis, "__dict__") else repr(analysis)
+    kind = next((c for c in type(analysis).__mro__ if c.__module__.startswith("pneunet.")),
+                type(analysis)).__qualname__  # a subclass that only wraps it: the same kind
+    text = "\n".join((__version__, circuit, kind, repr(settings)))
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
 def check_writable(path, what: str, hint: str) -> None:
     """A PneunetError now, before any work, when the file ``path`` (the sweep's table,
     plot or store) cannot be written; its directories are made."""

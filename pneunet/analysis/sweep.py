@@ -37,7 +37,7 @@ import numpy as np
 
 from ..errors import ParameterError, PneunetError
 from ..reprs import Summarized
-from .store import append, open_store, read_store
+from .store import append, fingerprint, open_store, read_store
 
 
 # -- points ---------------------------------------------------------------------------
@@ -354,6 +354,7 @@ class SweepResult(Summarized):
     wall_time_s: float = 0.0
     workers: int = 1
     with_solver_messages: int = 0  # points whose simulations drew integrator messages
+    stale: int = 0  # stored points recomputed: made by another circuit, analysis or version
 
     def _summary(self):
         rows = [("points", f"{len(self.table)} ({self.computed} computed, {self.reused} "
@@ -398,6 +399,9 @@ def run_sweep(build: Callable, points: Sequence[dict], analysis: Callable | None
     if len(set(keys)) != len(keys):
         raise ParameterError("the sweep has duplicate points")
     done = read_store(store) if store else {}
+    stamp = fingerprint(build, analysis) if store else None
+    stale = sum(1 for k in keys if k in done and done[k].get("fingerprint") != stamp)
+    done = {k: r for k, r in done.items() if r.get("fingerprint") == stamp}
     if retry_failed:
         done = {k: r for k, r in done.items() if r.get("error") is None}
     todo = [(k, p) for k, p in zip(keys, points) if k not in done
@@ -412,6 +416,7 @@ def run_sweep(build: Callable, points: Sequence[dict], analysis: Callable | None
     traces = {}
 
     def finish(rec):
+        rec["fingerprint"] = stamp
         trace = rec.pop("trace", None)
         if trace is not None:
             traces[rec["key"]] = pd.DataFrame(trace)
@@ -471,6 +476,7 @@ def run_sweep(build: Callable, points: Sequence[dict], analysis: Callable | None
             os.close(fd)
     table = records_table([records[k] for k in keys if k in records])
     return SweepResult(table, traces, computed=len(todo), reused=len(points) - len(todo),
+                       stale=stale,
                        failed=int(table["error"].notna().sum()) if len(table) else 0,
                        wall_time_s=time.perf_counter() - wall, workers=n_workers,
                        with_solver_messages=int((table.get("solver_messages", 0) > 0).sum())

@@ -151,6 +151,7 @@ def main(args) -> int:
     result.to_csv(out)
     summary = {"points": len(points), "computed": result.computed, "reused": result.reused,
                "failed": result.failed, "with_solver_messages": result.with_solver_messages,
+               "stale_recomputed": result.stale,
                "workers": result.workers,
                "wall_time_s": round(result.wall_time_s, 3), "table": str(out), "store": str(store)}
     table = result.table
@@ -167,6 +168,9 @@ def main(args) -> int:
         print(f"{summary['points']} points ({result.computed} computed, {result.reused} from "
               f"{store}), {result.failed} failed, {result.workers} worker(s), "
               f"{result.wall_time_s:.1f} s -> {out}")
+        if result.stale:
+            print(f"{result.stale} point(s) in {store} were made by another netlist, analysis "
+                  "or pneunet version: recomputed")
         if result.with_solver_messages:
             print(f"{result.with_solver_messages} point(s) with integrator warnings that "
                   "recovered (column solver_messages)")

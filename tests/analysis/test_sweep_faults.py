@@ -145,3 +145,35 @@ def test_unwritable_output_is_reported_before_any_work(tmp_path, capsys):
         err = capsys.readouterr().err
         assert f"{blocker} is a file, not a folder: cannot write {target}" in err
         assert not (tmp_path / "ok.csv.jsonl").exists() or option == "--store"
+
+
+def test_a_store_made_by_another_netlist_is_recomputed_and_said_so(tmp_path, capsys):
+    """Changing the tank from 200 mL to 20 mL between two runs of the same command: the
+    stored points are not reused (they were the big tank's), the second run says so and
+    matches a fresh run; a third run reuses them."""
+    net = tmp_path / "osc.pn"
+    text = (".options ambient=96kPa\n.param Rout=1.132\nPH supply 496kPa\n"
+            "X1 supply out tank axi_0p6mm\nRout out tank {Rout}\nVtank tank 200mL\n"
+            "Rvent tank atm 3\n.tran 10ms 8s\n.meas tran period PERIOD p(tank) FROM=2s\n"
+            ".meas tran p3 FIND p(tank) AT=3s\n")
+    net.write_text(text)
+    args = ["sweep", str(net), "--param", "Rout=list:1,2", "--analysis", "meas", "--workers",
+            "1", "--no-progress", "--out", str(tmp_path / "s.csv"), "--json"]
+    assert main(args) == 0
+    big = json.loads(capsys.readouterr().out)
+    net.write_text(text.replace("200mL", "20mL"))
+    assert main(args) == 0
+    small = json.loads(capsys.readouterr().out)
+    assert (small["computed"], small["reused"], small["stale_recomputed"]) == (2, 0, 2)
+    fresh = S.run_sweep(S.NetlistBuilder(net), [{"Rout": 1.0}, {"Rout": 2.0}],
+                        S.DeckMeasure(S.NetlistBuilder(net)), workers=1, progress=False)
+    assert [r["period"] for r in small["rows"]] == pytest.approx(list(fresh.table["period"]))
+    assert [r["p3"] for r in small["rows"]] == pytest.approx(list(fresh.table["p3"]))
+    assert [r["period"] for r in big["rows"]] == [None, None]  # 5.8 s: not in the window
+    assert [r["p3"] for r in small["rows"]] != pytest.approx([r["p3"] for r in big["rows"]])
+    args.remove("--json")
+    assert main(args) == 0
+    assert "2 computed" not in capsys.readouterr().out
+    net.write_text(text)  # the first netlist again: its old records are stale too by now
+    assert main(args) == 0
+    assert "2 point(s) in" in capsys.readouterr().out
