@@ -70,7 +70,11 @@ class Alignment:
     def of(cls, t, y, signal: str) -> "Alignment | None":
         """Alignment for the recorded oscillation ``y(t)``; None when it holds fewer
         than two full cycles (then samples are compared at their own times)."""
+        from .data import oscillates
+
         y = np.asarray(y, float)
+        if not oscillates(t, y):
+            return None
         half = t >= t[0] + 0.5 * (t[-1] - t[0])
         level = 0.5 * (float(np.min(y[half])) + float(np.max(y[half])))
         starts = recorded_crossings(t, y, level)

@@ -196,6 +196,32 @@ def compared_samples(y, half_width: int = JUMP_HALF_WIDTH) -> np.ndarray:
     return keep
 
 
+#: a record oscillates when its swing (1st to 99th percentile over its second half)
+#: exceeds this many noise standard deviations (second differences) and it has two
+#: full cycles: mid-level crossings of a steady record's noise are no cycles
+SWING_SIGMAS = 20.0
+
+
+def swings(y) -> bool:
+    """Whether the recorded signal ``y`` moves by more than its noise over its second
+    half (see :data:`SWING_SIGMAS`)."""
+    from ..truth.noise import difference_sigma
+
+    y = np.asarray(y, float)
+    half = y[len(y) // 2:]
+    if len(half) < 5:
+        return False
+    swing = float(np.percentile(half, 99) - np.percentile(half, 1))
+    sigma = difference_sigma(y)
+    return swing > SWING_SIGMAS * (sigma if sigma > 0 else 0.0)
+
+
+def oscillates(t, y) -> bool:
+    """Whether the recorded signal ``y(t)`` oscillates: it swings (:func:`swings`)
+    through two full cycles."""
+    return swings(y) and len(rising_crossings(t, y)) >= 3
+
+
 def rising_crossings(t, y):
     """Times the signal rises through the middle of its range (cycle starts)."""
     from ..analysis.oscillation import _rising_crossings
@@ -206,8 +232,10 @@ def rising_crossings(t, y):
 
 def split_by_cycles(data, node: str, train_fraction: float = 0.5, where: str = "trace"):
     """(train, test) windows: the first cycles (``train_fraction`` of the full cycles,
-    at least 2) and the remainder.  DataError when the record holds fewer than two full
-    cycles at ``node`` (nothing would be left to test on)."""
+    at least 2) and the remainder; for a record that does not oscillate at ``node``
+    (:func:`oscillates`: a steady state, a slow drift) the first ``train_fraction`` of
+    its duration and the rest.  DataError when an oscillating record holds fewer than
+    two full cycles at ``node`` (nothing would be left to test on)."""
     df = read_trace(data)
     col = f"p_{node}_kPa"
     if col not in df:
@@ -216,7 +244,11 @@ def split_by_cycles(data, node: str, train_fraction: float = 0.5, where: str = "
                         hint="pick the cycle node with --node; columns: "
                         + ", ".join(c for c in df.columns if c != "time_s"))
     t = df["time_s"].to_numpy()
-    rises = rising_crossings(t, df[col].to_numpy())
+    y = df[col].to_numpy()
+    if not swings(y):  # a steady record: its later part is held out
+        cut = float(t[0] + train_fraction * (t[-1] - t[0]))
+        return (float(t[0]), cut), (cut, float(t[-1]))
+    rises = rising_crossings(t, y)
     if len(rises) < 3:
         raise DataError(f"column {col} holds {max(len(rises) - 1, 0)} full cycle(s); a "
                         "diagnosis needs at least two (fit on the first, test on the rest)",

@@ -72,6 +72,7 @@ class TraceDiagnosis(Summarized):
         f = self.final
         return {"verdict": self.verdict, "accepted": list(self.accepted),
                 "noise_floor": _num(self.noise_floor), "rms_unit": self.unit,
+                "start_state": f.start_state.to_json() if f.start_state else None,
                 "ranking": self.ranking, "fit": f.as_dict(),
                 "base_fit": self.base.as_dict(), "waterfall": self.waterfall.to_json(),
                 "where": list(self.where), "noise": self.noise,
@@ -366,7 +367,6 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
     timing["simulations"] = sum(f.extras.get("simulations", 0) for f in fits.values()) \
         + fitting.extra_simulations
     wf = Waterfall(steps, floor, unit)
-    notes.insert(0, f"start: {state.describe()}")
     return TraceDiagnosis(verdict, accepted, floor, unit, ranking, fits, wf, where_txt,
                           {k: v for k, v in noise.items()}, train, test, timing, notes)
 

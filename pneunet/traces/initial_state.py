@@ -193,7 +193,7 @@ def choose_start(model, values: dict, data, mode: str = "auto",
     state = StartState("record", pressures, guesses, fitted, offset, 0.0, driven, reason)
     unrecorded = [n for n in algebraic if n not in guesses]
     if unrecorded:
-        state = _pick_branches(model, values, data, state, unrecorded, lo, hi)
+        state = _pick_branches(model, values, data, state, unrecorded, rest)
     return state
 
 
@@ -241,19 +241,38 @@ def _pressure_range(circuit, rest) -> tuple[float, float]:
     return 0.9 * lo, 1.1 * hi
 
 
-def _pick_branches(model, values, data, state, nodes, lo, hi) -> StartState:
-    """The guesses of unrecorded algebraic ``nodes`` (all low, all high) whose short
-    simulation matches the first recorded samples best."""
+def _pick_branches(model, values, data, state, nodes, rest) -> StartState:
+    """Guesses for the unrecorded algebraic ``nodes`` (a valve's output between its
+    branches): each pressure the circuit holds at the start (rest state, recorded first
+    values) tried as the guess of all of them; of the distinct consistent states they
+    lead to, the one whose simulation matches the first recorded samples best."""
+    from ..engine.assembly import CircuitDAE
+    from ..engine.single_rate import consistent_state
     from ..errors import PneunetError
     from .model import sample_at
 
     times = data["time_s"].to_numpy()
-    k = min(len(times), max(FIRST_SAMPLES * 3, 10))
+    k = min(len(times), max(FIRST_SAMPLES * 2, 10))
     cols = [c for c in data.columns if c.startswith("p_")]
-    best, states = None, []
-    for level in (hi / 1.1, lo / 0.9):
+    levels = sorted({round(v, 6) for v in list(rest.values()) + list(state.pressures.values())
+                     + list(state.guesses.values())})
+    roots, states = [], []
+    for level in levels:
         trial = StartState("record", state.pressures, {**state.guesses,
                                                         **{n: level for n in nodes}},
+                           state.fitted, state.time_offset, 0.0, state.driven, state.reason)
+        try:
+            circuit = model.with_state(trial).circuit(values)
+            dae = CircuitDAE(circuit)
+            y, _ = consistent_state(dae, trial.time_offset, dae.initial_state(trial.time_offset))
+        except PneunetError:
+            continue
+        root = np.array([y[dae.node_names.index(n)] for n in nodes])
+        if any(np.allclose(root, r, atol=REST_TOLERANCE_KPA) for r in roots):
+            continue
+        roots.append(root)
+        trial = StartState("record", state.pressures,
+                           {**state.guesses, **{n: float(v) for n, v in zip(nodes, root)}},
                            state.fitted, state.time_offset, 0.0, state.driven, state.reason)
         try:
             sol = model.with_state(trial).simulate(values, float(times[k - 1]))
@@ -265,8 +284,7 @@ def _pick_branches(model, values, data, state, nodes, lo, hi) -> StartState:
     if not states:
         raise DataError("the circuit cannot start from the recorded first samples",
                         where="start state", hint="try --start rest or --start settled")
-    best = min(states, key=lambda s: s[0])[1]
-    return best
+    return min(states, key=lambda s: s[0])[1]
 
 
 def _settled(data, where) -> StartState:

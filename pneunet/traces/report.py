@@ -15,6 +15,8 @@ def format_report(d) -> str:
     L = ["[[Diagnosis: circuit vs recording]]"]
     L.append(f"    fitted on     = {d.train_window[0]:g} … {d.train_window[1]:.4g} s, held out "
              f"{d.test_window[0]:.4g} … {d.test_window[1]:.4g} s")
+    if d.final.start_state is not None:
+        L.append(f"    start state   = {d.final.start_state.describe()}")
     L.append(f"    noise floor   = {d.noise_floor:.3g} {d.unit} (estimated from the data: "
              f"{d.noise['method']})")
     L.append(f"    verdict       = {VERDICT_TEXT[d.verdict]}")

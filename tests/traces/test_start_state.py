@@ -1,0 +1,146 @@
+"""Recordings as a logger makes them (issue 31): the circuit's state at the first sample.
+
+Recordings come from stand-alone models (scipy's Radau on equations written out by hand,
+:mod:`.standalone`, :mod:`.standalone_driven`), started at switch-on or mid-run.  A fit
+that started the simulation at the netlist's rest state compared a start-up transient
+with a settled record: here the start is read from the record, and the intervals of a
+clean recording cover the truth wherever the logger was started.
+"""
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from pneunet.analysis.circuits import oscillator
+from pneunet.analysis.sweep import NetlistBuilder
+from pneunet.traces import fit_trace, read_trace
+from pneunet.traces.initial_state import choose_start, first_value, sources_vary
+from pneunet.traces.model import TraceModel
+
+from .standalone import oscillator_record
+from .standalone_driven import amplifier_record
+
+TRUE = {"Rout": 1.132, "Rvent": 3.0, "V": 50.0}
+PARAMS = {"Rout": (1.4, 0.3, 5.0), "Rvent": (3.8, 0.5, 20.0), "V": (65.0, 5.0, 500.0)}
+AMPLIFIER = "netlists/amplifier.pn"
+
+
+def mid_run(record, start):
+    """The part of ``record`` from ``start`` s on, its clock restarted at 0."""
+    out = record[record["time_s"] >= start - 1e-9].reset_index(drop=True)
+    out["time_s"] -= out["time_s"].iloc[0]
+    return out
+
+
+@pytest.fixture(scope="module")
+def long_record():
+    return oscillator_record(20.0, noise=0.4, seed=4)
+
+
+def test_first_value_is_unbiased_before_a_corner():
+    """A relaxation p = 200 − 80·(1 − e^(−t/0.3)) sampled at 20 Hz with a corner (it
+    turns to a rise) after 6 samples: the parabola through the samples before the corner
+    lands within 3 standard errors of the true 200 kPa, where a straight line through all
+    12 samples is ~8 kPa off."""
+    t = np.arange(40) * 0.05
+    p = np.where(t < 0.3, 200 - 80 * (1 - np.exp(-t / 0.3)),
+                 200 - 80 * (1 - np.exp(-1.0)) + 150 * (t - 0.3))
+    rng = np.random.default_rng(3)
+    hits = []
+    for _ in range(50):
+        y = p + 0.3 * rng.standard_normal(t.size)
+        v, se = first_value(t, y)
+        hits.append(abs(v - 200.0) <= 3 * se)
+        assert 0.1 < se < 1.0
+    assert np.mean(hits) >= 0.9
+    line = np.polyfit(t[:12], p[:12], 1)[1]
+    assert abs(line - 200.0) > 5.0
+
+
+def test_rest_is_kept_for_a_recording_from_switch_on(long_record):
+    model = TraceModel(oscillator, {"V": 50.0})
+    state = choose_start(model, {"Rout": 1.4, "Rvent": 3.8}, read_trace(long_record))
+    assert state.mode == "rest" and not state.driven
+
+
+@pytest.mark.parametrize("start", [2.3, 6.25])  # tank falling (valve closed), rising (open)
+def test_record_start_reads_the_first_samples_and_the_branch(long_record, start):
+    """Started mid-run with only p_tank recorded: the tank starts at its recorded value,
+    and the valve's branch (p_out, not recorded) is the one whose first samples match:
+    the simulation from that state follows the record for the next half second."""
+    rec = mid_run(long_record, start)[["time_s", "p_tank_kPa"]]
+    clean = mid_run(oscillator_record(20.0, noise=0.0, seed=4), start)
+    model = TraceModel(oscillator, {"V": 50.0})
+    state = choose_start(model, dict(TRUE), read_trace(rec))
+    assert state.mode == "record"
+    assert state.pressures["tank"] == pytest.approx(clean["p_tank_kPa"][0], abs=1.0)
+    sol = model.with_state(state).simulate(dict(TRUE), 0.5)
+    t = clean["time_s"].to_numpy()[:11]
+    np.testing.assert_allclose(np.interp(t, sol.t, sol["p_tank"]),
+                               clean["p_tank_kPa"].to_numpy()[:11], atol=1.0)
+    rising = clean["p_tank_kPa"][10] > clean["p_tank_kPa"][0]
+    assert (state.guesses["out"] > 300.0) == rising
+
+
+def test_sources_vary_only_for_a_driven_circuit():
+    amp = NetlistBuilder(AMPLIFIER)({})
+    assert sources_vary(amp, 0.0, 30.0)
+    assert not sources_vary(oscillator({}), 0.0, 30.0)
+    c = oscillator({})
+    from pneunet.waveforms import PiecewiseLinear
+
+    c.elements["PH"].params["value"] = PiecewiseLinear([0.0, 0.5], [96.0, 496.0])
+    assert sources_vary(c, 0.0, 30.0) and not sources_vary(c, 8.0, 38.0)
+
+
+def _covers(fit, truth):
+    return {k: fit.ci[k][0] <= v <= fit.ci[k][1] for k, v in truth.items()}
+
+
+@pytest.mark.slow
+def test_mid_run_oscillator_fit_covers_the_truth_where_rest_fails():
+    """Logger started 7.3 s after switch-on: the start read from the record gives
+    intervals covering R_out, R_vent and V; forced to start at rest, the same fit
+    is 3× worse and 10 % off the truth (the simulated start-up is compared with a
+    settled record)."""
+    rec = mid_run(oscillator_record(19.3, noise=0.4, seed=1), 7.3)
+    fit = fit_trace(oscillator, rec, PARAMS, node="tank", window=(0.0, 6.0))
+    assert fit.start_state.mode == "record"
+    assert all(_covers(fit, TRUE).values()), (fit.values, fit.ci)
+    rest = fit_trace(oscillator, rec, PARAMS, node="tank", window=(0.0, 6.0),
+                     start_state="rest")
+    assert rest.error() > 3 * fit.error()
+    assert max(abs(math.log(rest.values[k] / v)) for k, v in TRUE.items()) > 0.1
+
+
+@pytest.mark.slow
+def test_driven_circuit_is_compared_on_its_own_clock_and_covers_the_truth(tmp_path):
+    """The amplifier filling a 30 mL actuator through a 0.24 kPa·s/mg line (the netlist
+    says 0.2), recorded at 100 Hz from 5.15 s on the sources' clock (mid-fill): the
+    file's clock is kept for the sources, the start is read from the record, no cycle
+    alignment, and both intervals cover the truth."""
+    rec = amplifier_record(5.15, 20.0, dt=0.01, noise=0.3, seed=2, R_line=0.24, V=30.0)
+    path = tmp_path / "amp.csv"
+    rec.to_csv(path, index=False)
+    fit = fit_trace(NetlistBuilder(AMPLIFIER), path,
+                    {"Rtube.R": (0.2, 0.02, 2.0), "Amck.V": (25.0, 5.0, 200.0)}, node="muscle")
+    state = fit.start_state
+    assert state.driven and state.mode == "record"
+    assert state.time_offset == pytest.approx(5.15)
+    assert fit.extras["alignment"] is None
+    assert all(_covers(fit, {"Rtube.R": 0.24, "Amck.V": 30.0}).values()), (fit.values, fit.ci)
+    # the intervals are not wide: a 3 % error in R would be excluded
+    lo, hi = fit.ci["Rtube.R"]
+    assert hi / lo < 1.03
+    assert fit.as_dict()["start_state"]["time_offset_s"] == pytest.approx(5.15)
+    assert math.isfinite(fit.error()) and fit.error() < 0.4
+
+
+def test_settled_start_is_refused_for_a_driven_circuit():
+    from pneunet.errors import ParameterError
+
+    rec = amplifier_record(5.15, 12.0, dt=0.02, noise=0.3, seed=2)
+    model = TraceModel(NetlistBuilder(AMPLIFIER))
+    with pytest.raises(ParameterError, match="oscillates on its own"):
+        choose_start(model, {}, read_trace(pd.DataFrame(rec)), "settled")
