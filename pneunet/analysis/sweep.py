@@ -216,18 +216,26 @@ def check_points(build, points: list) -> None:
 
 class NetlistBuilder:
     """``build(point)`` for a netlist: plain names override ``.param`` values, dotted
-    names set element parameters.  Uses the netlist package's ``parse_file``."""
+    names set element parameters.  The file (and its includes) is read and parsed once
+    per builder and process (:func:`pneunet.netlist.load_file`), elaborated per point:
+    a fit's trial points cost no parsing."""
 
     def __init__(self, path, parse: dict | None = None, **options):
         self.path = str(path)
         self.parse = dict(parse or {})  # parse_file's limits and include_path
         self.options = options
+        self._source = None
+
+    def __getstate__(self):  # workers parse for themselves
+        return {**self.__dict__, "_source": None}
 
     def __call__(self, point: dict):
-        from ..netlist import parse_file
+        from ..netlist import elaborate_source, load_file
 
-        deck = parse_file(self.path, overrides={k: v for k, v in point.items() if "." not in k},
-                          **self.parse)
+        if self._source is None:
+            self._source = load_file(self.path, **self.parse)
+        deck = elaborate_source(self._source,
+                                {k: v for k, v in point.items() if "." not in k})
         circuit = apply_overrides(deck.circuit, point)
         if self.options:
             circuit.options = circuit.options.replace(**self.options)

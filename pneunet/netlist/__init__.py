@@ -41,6 +41,28 @@ def parse_file(path, overrides: dict | None = None, *, limits=None, include_path
                   include_path)
 
 
+def load_file(path, *, limits=None, include_path=()):
+    """A netlist file read, parsed and its includes expanded, not yet elaborated: give it
+    to :func:`elaborate_source` as often as needed (a fit's every trial point), the file
+    read and parsed once."""
+    from .includes import IncludePolicy
+    from .structure import load
+    from .syntax import read_source
+
+    limits = _limits(limits)
+    return load(read_source(Path(path), limits=limits), IncludePolicy.for_netlist(
+        Path(path), include_path), limits)
+
+
+def elaborate_source(source, overrides: dict | None = None) -> Deck:
+    """The :class:`Deck` of a :func:`load_file` result with ``.param`` ``overrides``."""
+    from ..gcpause import collector_paused
+    from .elaborate import elaborate
+
+    with collector_paused():
+        return elaborate(source, overrides)
+
+
 def _limits(limits):
     from .limits import DEFAULT
 
