@@ -10,6 +10,7 @@ import sys
 
 from ..csvdata import TRACE_MAX_ROWS
 from . import netlist_args
+from .outputs import output_file
 
 
 def register(subparsers) -> None:
@@ -62,6 +63,10 @@ def register(subparsers) -> None:
     p.add_argument("--workers", type=int, default=None,
                    help="processes for parallel finite differences (default: 2 if 2 cores)")
     p.add_argument("--plot", metavar="PNG", default=None, help="fit and residual plot")
+    p.add_argument("--netlist-out", metavar="FILE", default=None, type=output_file(),
+                   help="write the fitted circuit as a netlist: yours with the fitted values "
+                        "and (with --candidates) the accepted effects written in; run it "
+                        "with pneunet run")
     p.add_argument("--waterfall", metavar="PNG", default=None,
                    help="error waterfall plot (with --candidates)")
     p.add_argument("--json", action="store_true",
@@ -251,6 +256,12 @@ def _run(args, data, build, params, fixed, say):
         out["fit"] = fit.as_dict()
         text = fit.report()
     out["phase_rms"] = json.loads(fit.phase_rms.to_json(orient="records"))
+    if args.netlist_out:
+        netlist = diag.corrected_netlist() if args.candidates else fit.corrected_netlist()
+        with open(args.netlist_out, "w", encoding="utf-8") as fh:
+            fh.write(netlist)
+        out["netlist_out"] = str(args.netlist_out)
+        text += f"\ncorrected netlist -> {args.netlist_out}"
     if args.plot:
         out["plot"] = str(plot_fit(fit, data, args.plot))
         text += f"\nplot -> {out['plot']}"

@@ -89,6 +89,13 @@ class TraceDiagnosis(Summarized):
 
         return plot_diagnosis(self, directory)
 
+    def corrected_netlist(self) -> str:
+        """The final model (the accepted effects written as elements, the fitted values
+        in) as netlist text (:meth:`TraceFit.corrected_netlist`)."""
+        return self.final.corrected_netlist(
+            verdict=f"{self.verdict}" + (f", accepted {', '.join(self.accepted)}"
+                                         if self.accepted else ", no effect accepted"))
+
 
 def _num(v):
     return None if v is None or not math.isfinite(float(v)) else float(v)

@@ -94,12 +94,21 @@ class TraceFit(Summarized):
                 "wall_time_s": self.wall_time_s, "unit": self.unit,
                 "start_state": self.start_state.to_json() if self.start_state else None,
                 **{k: v for k, v in self.extras.items()
-                   if k not in ("stage1", "alignment", "jacobian", "start_state")}}
+                   if k not in ("stage1", "alignment", "jacobian", "start_state", "model")}}
 
     @property
     def start_state(self):
         """The :class:`~pneunet.traces.initial_state.StartState` the fit used."""
         return self.extras.get("start_state")
+
+    def corrected_netlist(self, verdict: str | None = None) -> str:
+        """The fitted circuit as netlist text: the user's netlist with the fitted values
+        and the effects written in (:mod:`pneunet.traces.netlist_out`)."""
+        from .netlist_out import corrected_netlist
+
+        return corrected_netlist(self.extras["model"], self.values, ci=self.ci,
+                                 recording=self.extras.get("recording", ""),
+                                 times=self.residuals["time_s"].to_numpy(), verdict=verdict)
 
     def report(self) -> str:
         lines = ["parameter        estimate      95 % CI"]
@@ -246,6 +255,7 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
                     tuple(effects), sol, time.perf_counter() - wall, unit, scales,
                     {"stage1": stage1, "simulations": nfev, "intervals": info,
                      "alignment": aligned, "jacobian": res.jac, "start_state": state,
+                     "model": model, "recording": where,
                      "compared": {s: int(keep_all[s].sum()) for s in sigs}})
 
 
