@@ -1,12 +1,23 @@
 """The trace diagnosis on stand-alone recordings: one row per hidden physics.
 
-Each recording is the paper's oscillator (R_out 1.132, R_vent 3, V 50 mL) written out by
-hand and integrated by scipy (tests/traces/standalone.py: nothing of pneunet's effect
-code), 12 s = 8 cycles at 20 Hz, p_tank and p_out, 0.4 kPa noise.  The diagnosis fits
-R_out, R_vent and V from guesses 20-30 % off and tries every registered circuit effect.
+Each recording comes from a model written out by hand and integrated by scipy
+(tests/traces/standalone.py, standalone_driven.py: nothing of pneunet's effect code):
 
-    python benchmarks/study_trace_diagnosis.py             # every case (~10 min)
-    python benchmarks/study_trace_diagnosis.py clean side  # some cases
+* ``oscillator`` cases: the paper's oscillator (R_out 1.132, R_vent 3, V 50 mL), 12 s
+  = 8 cycles at 20 Hz, p_tank and p_out, 0.4 kPa noise; with ``--mid-run`` the logger
+  starts at a random time 2–10 s after switch-on (after the first cycle), its clock
+  restarted at 0.  Fitted R_out, R_vent, V from guesses 20–30 % off.
+* ``driven`` cases: the flow amplifier (netlists/amplifier.pn) filling a 30 mL
+  actuator through a 0.24 kPa·s/mg line (the netlist says 0.2), both valves switched by
+  antiphase pulses every 5 s, recorded at 100 Hz for 30 s from a random time 0–20 s on
+  the sources' clock, p_act and p_muscle, 0.3 kPa noise.  Fitted the line's R and V.
+
+Every registered circuit effect is a candidate.
+
+    python benchmarks/study_trace_diagnosis.py                 # every oscillator case
+    python benchmarks/study_trace_diagnosis.py --mid-run       # the same, started mid-run
+    python benchmarks/study_trace_diagnosis.py --driven        # the driven circuit's cases
+    python benchmarks/study_trace_diagnosis.py clean side      # some cases
     options: --seed N
 """
 from __future__ import annotations
@@ -16,7 +27,10 @@ import sys
 import time
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
 
 #: case → (stand-alone keywords, what a right answer is)
 CASES = {
@@ -33,30 +47,84 @@ CASES = {
 }
 PARAMS = {"Rout": (1.4, 0.3, 5.0), "Rvent": (3.8, 0.5, 20.0), "V": (65.0, 5.0, 500.0)}
 
+#: driven case → (stand-alone keywords, what a right answer is)
+DRIVEN = {
+    "clean": ({}, "adequate"),
+    "heat-transfer": ({"heat_tau": 1.0}, "volume_heat_transfer"),
+    "dead-volume": ({"V_act": 3.0}, "dead_volume@act"),
+    "control-tube": ({"tube_ctrl": (20.0, 10.0)}, "tube@Xin.ctrl"),
+    "heat+control-tube": ({"heat_tau": 1.0, "tube_ctrl": (20.0, 10.0)},
+                          "volume_heat_transfer + tube@Xin.ctrl"),
+    "leak": ({"leak": 40.0}, "unexplained"),
+    "compliant": ({"compliance": 0.004}, "unexplained"),
+}
+DRIVEN_PARAMS = {"Rtube.R": (0.2, 0.02, 2.0), "Amck.V": (25.0, 5.0, 200.0)}
+DRIVEN_TRUTH = {"Rtube.R": 0.24, "Amck.V": 30.0}
+
+
+def oscillator_case(name, seed, mid_run):
+    from pneunet.analysis.circuits import oscillator
+    from tests.traces.standalone import oscillator_record
+
+    kw, expected = CASES[name]
+    start = float(np.random.default_rng([seed, 7]).uniform(2.0, 10.0)) if mid_run else 0.0
+    rec = oscillator_record(12.0 + start, noise=0.4, seed=seed, **kw)
+    rec = rec[rec["time_s"] >= start - 1e-9].reset_index(drop=True)
+    rec["time_s"] -= rec["time_s"].iloc[0]
+    return rec, oscillator, PARAMS, "tank", expected, start
+
+
+def driven_case(name, seed):
+    from pneunet.analysis.sweep import NetlistBuilder
+    from tests.traces.standalone_driven import amplifier_record
+
+    kw, expected = DRIVEN[name]
+    start = float(np.random.default_rng([seed, 8]).uniform(0.0, 20.0))
+    rec = amplifier_record(start, 30.0, dt=0.01, noise=0.3, seed=seed,
+                           R_line=DRIVEN_TRUTH["Rtube.R"], V=DRIVEN_TRUTH["Amck.V"], **kw)
+    return (rec, NetlistBuilder(str(ROOT / "netlists" / "amplifier.pn")), DRIVEN_PARAMS,
+            "muscle", expected, start)
+
+
+def right(d, expected) -> bool:
+    if expected in ("adequate", "unexplained"):
+        return d.verdict == expected
+    return d.verdict == "explained" and " + ".join(d.accepted) == expected \
+        or d.verdict == "explained" and set(d.accepted) == set(expected.split(" + "))
+
 
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("cases", nargs="*", default=list(CASES))
+    ap.add_argument("cases", nargs="*", default=None)
     ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--mid-run", action="store_true", help="oscillator logger started mid-run")
+    ap.add_argument("--driven", action="store_true", help="the driven amplifier's cases")
     args = ap.parse_args(argv)
 
-    from pneunet.analysis.circuits import oscillator
     from pneunet.traces import diagnose_trace
-    from tests.traces.standalone import oscillator_record
 
-    print("| case | expected | verdict | accepted | held-out / floor (base → final) | "
-          "floor kPa | time s |")
-    print("|---|---|---|---|---|---|---|")
-    for name in args.cases:
-        kw, expected = CASES[name]
-        rec = oscillator_record(12.0, noise=0.4, seed=args.seed, **kw)
+    table = DRIVEN if args.driven else CASES
+    print("| case | start s | expected | verdict | accepted | held-out / floor (base → final) | "
+          "start state | right | time s (base, screen, fits) | simulations |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for name in args.cases or list(table):
+        if args.driven:
+            rec, build, params, node, expected, start = driven_case(name, args.seed)
+        else:
+            rec, build, params, node, expected, start = oscillator_case(name, args.seed,
+                                                                        args.mid_run)
         t0 = time.perf_counter()
-        d = diagnose_trace(oscillator, rec, PARAMS, node="tank")
+        d = diagnose_trace(build, rec, params, node=node)
         wall = time.perf_counter() - t0
         steps = d.waterfall.steps
         ratio = f"{steps[0].held_out / d.noise_floor:.2f} → {steps[-1].held_out / d.noise_floor:.2f}"
-        print(f"| {name} | {expected} | {d.verdict} | {', '.join(d.accepted) or '–'} | {ratio} | "
-              f"{d.noise_floor:.3f} | {wall:.0f} |", flush=True)
+        print(f"| {name} | {start:.1f} | {expected} | {d.verdict} | "
+              f"{', '.join(d.accepted) or '–'} | {ratio} | {d.final.start_state.mode} | "
+              f"{'yes' if right(d, expected) else 'NO'} | {wall:.0f} ("
+              + ", ".join(f"{d.timing.get(k, 0):.0f}" for k in ("base_fit_s", "screen_s",
+                                                                  "candidate_fits_s"))
+              + f") | {d.timing.get('simulations', 0) + d.timing.get('screen_simulations', 0)} |",
+              flush=True)
 
 
 if __name__ == "__main__":

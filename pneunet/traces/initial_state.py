@@ -36,6 +36,11 @@ FIRST_SAMPLES = 12
 #: errors of its rest pressure (and within REST_TOLERANCE_KPA at least)
 REST_SIGMAS = 5.0
 REST_TOLERANCE_KPA = 1.0
+#: unrecorded storage that the recorded algebraic nodes put this far from rest (kPa, and
+#: this fraction of the circuit's pressure range) is off rest: the algebraic values also
+#: depend on the guessed parameters
+IMPLIED_TOLERANCE_KPA = 5.0
+IMPLIED_TOLERANCE = 0.05
 #: full recorded cycles simulated before the record in the ``settled`` start
 SETTLE_CYCLES = 4
 #: prefix of the fitted initial pressure of an unrecorded storage node
@@ -173,20 +178,28 @@ def choose_start(model, values: dict, data, mode: str = "auto",
     off_rest = {n: v for n, (v, se) in recorded.items() if n in storage
                 and abs(v - rest[n]) > max(REST_TOLERANCE_KPA,
                                            REST_SIGMAS * (se if math.isfinite(se) else 0.0))}
+    measured_algebraic = {n: v for n, (v, _) in recorded.items() if n in algebraic}
+    unrecorded_storage = [n for n in storage if n not in recorded]
+    lo, hi = _pressure_range(circuit, rest)
+    implied = _implied_storage(circuit, offset, rest, {n: v for n, (v, _) in recorded.items()
+                                                       if n in storage},
+                               measured_algebraic, unrecorded_storage, lo, hi)
+    if not off_rest:  # unrecorded storage the recorded algebraic nodes put off rest
+        off_rest = {n: v for n, v in implied.items()
+                    if abs(v - rest[n]) > max(IMPLIED_TOLERANCE_KPA,
+                                              IMPLIED_TOLERANCE * (hi - lo))}
     if not off_rest:  # storage at rest: is every recorded algebraic node on its branch?
-        off_rest = _other_branches(circuit, offset, rest,
-                                   {n: v for n, (v, _) in recorded.items() if n in algebraic})
+        off_rest = _other_branches(circuit, offset, rest, measured_algebraic)
     if mode == "rest" or (mode == "auto" and not off_rest):
         reason = "the first samples match the rest state" if mode == "auto" else "forced"
         return StartState("rest", time_offset=offset, driven=driven, reason=reason)
     pressures = {n: v for n, (v, _) in recorded.items() if n in storage}
     guesses = {n: v for n, (v, _) in recorded.items() if n in algebraic}
-    lo, hi = _pressure_range(circuit, rest)
-    fitted = {f"{P0_PREFIX}{n}": (float(np.clip(rest[n], lo, hi)), lo, hi)
+    fitted = {f"{P0_PREFIX}{n}": (float(np.clip(implied.get(n, rest[n]), lo, hi)), lo, hi)
               for n in storage if n not in pressures}
     if mode == "auto":
-        first = ", ".join(f"{n} {recorded[n][0]:.4g} kPa against {rest[n]:.4g}"
-                          for n in list(off_rest)[:3])
+        first = ", ".join(f"{n} {v:.4g} kPa against {rest[n]:.4g}"
+                          for n, v in list(off_rest.items())[:3])
         reason = f"the first samples are off the rest state: {first}"
     else:
         reason = "forced"
@@ -210,6 +223,41 @@ def _rest_state(circuit, t0):
     storage = [n for i, n in enumerate(dae.node_names)
                if dae.differential[i] and n not in dae.state_nodes]
     return rest, storage, algebraic
+
+
+def _implied_storage(circuit, t0, rest, storage_values, algebraic_values, unknown, lo, hi):
+    """{unrecorded storage node: kPa}: the pressures that put the recorded algebraic
+    nodes (a valve junction) at their recorded first values in the consistent state,
+    by least squares from the rest state (the recorded storage at its values); empty
+    when nothing is recorded that depends on them."""
+    from scipy import optimize
+
+    from ..engine.assembly import CircuitDAE
+    from ..engine.single_rate import consistent_state
+    from ..errors import PneunetError
+
+    if not unknown or not algebraic_values:
+        return {}
+    dae = CircuitDAE(circuit)
+    names = list(dae.node_names)
+    base = dae.initial_state(t0)
+    for n, v in {**storage_values, **algebraic_values}.items():
+        base[names.index(n)] = v
+    guess = base.copy()
+
+    def miss(z):
+        y0 = guess.copy()
+        y0[[names.index(n) for n in unknown]] = z
+        try:
+            y, _ = consistent_state(dae, t0, y0)
+        except PneunetError:
+            return np.full(len(algebraic_values), 1e3)
+        guess[dae.algebraic_idx] = y[dae.algebraic_idx]  # the next solve starts here
+        return np.array([y[names.index(n)] - v for n, v in algebraic_values.items()])
+
+    z0 = np.clip([rest[n] for n in unknown], lo, hi)
+    r = optimize.least_squares(miss, z0, bounds=(lo, hi), diff_step=1e-4, max_nfev=50)
+    return dict(zip(unknown, map(float, r.x)))
 
 
 def _other_branches(circuit, t0, rest, recorded) -> dict:

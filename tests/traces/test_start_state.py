@@ -144,3 +144,19 @@ def test_settled_start_is_refused_for_a_driven_circuit():
     model = TraceModel(NetlistBuilder(AMPLIFIER))
     with pytest.raises(ParameterError, match="oscillates on its own"):
         choose_start(model, {}, read_trace(pd.DataFrame(rec)), "settled")
+
+
+@pytest.mark.slow
+def test_unrecorded_storage_is_fitted_from_a_recorded_junction():
+    """Only the valves' junction recorded, mid-fill (the actuator unrecorded at ~255 kPa):
+    the actuator's pressure that puts the junction at its recorded first value starts
+    the fit, the start is 'record' (not rest: the actuator is far from its 120 kPa), the
+    actuator's initial pressure is fitted (p0@muscle, with an interval covering the
+    stand-alone model's own value) and R, V are covered."""
+    full = amplifier_record(5.12, 20.0, dt=0.01, noise=0.3, seed=2, R_line=0.24, V=30.0)
+    clean = amplifier_record(5.12, 0.05, dt=0.01, noise=0.0, R_line=0.24, V=30.0)
+    fit = fit_trace(NetlistBuilder(AMPLIFIER), full[["time_s", "p_act_kPa"]],
+                    {"Rtube.R": (0.2, 0.02, 2.0), "Amck.V": (25.0, 5.0, 200.0)}, node="act")
+    assert fit.start_state.mode == "record" and list(fit.start_state.fitted) == ["p0@muscle"]
+    truth = {"Rtube.R": 0.24, "Amck.V": 30.0, "p0@muscle": float(clean["p_muscle_kPa"][0])}
+    assert all(_covers(fit, truth).values()), (fit.values, fit.ci, truth)
