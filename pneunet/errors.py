@@ -62,15 +62,35 @@ class PneunetError(Exception):
 
     def report(self) -> str:
         """Multi-line text for a terminal: message, caret display, hint."""
-        head = f"{self.where}: error: {self.message}" if self.where else f"error: {self.message}"
-        lines = [head]
-        if self.span is not None and self.span.caret():
-            lines.append(self.span.caret())
-        for where in self.span.via if self.span is not None else ():
-            lines.append(f"  included from {where}")
-        if self.hint:
-            lines.append(f"hint: {self.hint}")
-        return "\n".join(lines)
+        return _report("error", self.where, self.message, self.span, self.hint)
+
+
+def _report(kind, where, message, span, hint) -> str:
+    lines = [f"{where}: {kind}: {message}" if where else f"{kind}: {message}"]
+    if span is not None and span.caret():
+        lines.append(span.caret())
+    for via in span.via if span is not None else ():
+        lines.append(f"  included from {via}")
+    if hint:
+        lines.append(f"hint: {hint}")
+    return "\n".join(lines)
+
+
+class InputWarning(UserWarning):
+    """Input that is allowed but probably not what was meant (a bare number far outside a
+    parameter's usual range, a scale factor read as a unit): the run goes on; the CLI prints
+    ``file:line:column: warning: …`` with the caret line and a hint (``-q`` silences it)."""
+
+    def __init__(self, message: str, *, span: SourceSpan | None = None,
+                 where: str | None = None, hint: str | None = None):
+        self.message, self.span, self.hint = message, span, hint
+        self.where = where if where is not None else (str(span) if span else None)
+        text = f"{self.where}: {message}" if self.where else message
+        super().__init__(text + (f" (hint: {hint})" if hint else ""))
+
+    def report(self) -> str:
+        """Multi-line text for a terminal, like :meth:`PneunetError.report`."""
+        return _report("warning", self.where, self.message, self.span, self.hint)
 
 
 class NetlistError(PneunetError):

@@ -146,14 +146,18 @@ def _drop_stdout() -> None:
 def _show_solver_warnings(quiet: bool) -> None:
     """The integrator's warnings as ``warning: …`` lines on stderr; none with -q."""
     from ..engine.diagnostics import SolverWarning
+    from ..errors import InputWarning
 
     if quiet:
         warnings.simplefilter("ignore", SolverWarning)
+        warnings.simplefilter("ignore", InputWarning)
         return
     default = warnings.showwarning
 
     def show(message, category, filename, lineno, file=None, line=None):
-        if issubclass(category, SolverWarning):
+        if isinstance(message, InputWarning):
+            print(message.report(), file=sys.stderr)
+        elif issubclass(category, SolverWarning):
             print(f"warning: {message}", file=sys.stderr)
         else:
             default(message, category, filename, lineno, file, line)

@@ -48,6 +48,12 @@ class Param:
     default: Any = None
     low_inclusive: bool = True
     kind: str = "number"  # 'number', 'waveform' or 'object'
+    #: (low, high) where real values lie, internal unit: a netlist's bare number outside it
+    #: is a located warning (pneunet.netlist.plausible); None: no usual range
+    typical: tuple[float, float] | None = None
+    #: (low, high) outside which any value, unit or not, is a located warning (default:
+    #: ``typical`` widened 100× each way)
+    plausible: tuple[float, float] | None = None
 
     @property
     def required(self) -> bool:
@@ -108,6 +114,9 @@ class ElementFamily:
     #: (a, b): the element is a zero-resistance link, port a's node at port b's pressure
     link_ports: ClassVar[tuple[int, int] | None] = None
     fluids: ClassVar[tuple[str, ...]] = ("gas",)  # 'gas' and/or 'liquid': where its law holds
+    #: its signals warn about a whole run (pneunet.elements.run_checks): read at the end of
+    #: every transient, whatever is saved
+    checks_run: ClassVar[bool] = False
 
     def __init__(self, specs: list[ElementSpec], context: FamilyContext):
         self.specs = specs

@@ -18,7 +18,7 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..laws import signed_root
-from . import register
+from . import register, run_checks
 from .base import ElementFamily, Param
 
 _OUT_IN = np.array([1.0, -1.0])  # a flow a→b leaves node a and enters node b
@@ -32,6 +32,7 @@ def open_fraction(delta_p, pcrack, width):
 
 @register
 class CheckValve(ElementFamily):
+    checks_run = True
     """Check valve a→b: cracking pressure, smooth opening over ``width``, closed leakage."""
 
     kind = "check_valve"
@@ -90,7 +91,10 @@ class CheckValve(ElementFamily):
         return self._law(p, partials=False)[0][..., None] * _OUT_IN
 
     def signals(self, t, p):
-        opening, _ = open_fraction(p[..., 0] - p[..., 1], self._pcrack, self._width)
+        dp = p[..., 0] - p[..., 1]
+        opening, _ = open_fraction(dp, self._pcrack, self._width)
+        if np.size(t) > 1:
+            run_checks.check_valve_shut(self.specs, t, dp, opening, self._pcrack)
         return {"mdot": ("mg/s", self.flows(t, p, None)[..., 0]), "opening": ("1", opening)}
 
 
@@ -174,4 +178,6 @@ class HystereticCheckValve(CheckValve):
     def signals(self, t, p):
         x = self._opening(p[..., 2])
         mdot = self._quadrature(p[..., 0], p[..., 1], x, False)[0]
+        if np.size(t) > 1:
+            run_checks.check_valve_shut(self.specs, t, p[..., 0] - p[..., 1], x, self._pcrack)
         return {"mdot": ("mg/s", mdot), "opening": ("1", x)}

@@ -9,7 +9,7 @@ The mass stored is m = ρ(p)·V(p) with ρ = p·M/(R·T), so the capacitance is
 ``pv_volume`` (aliases ``pv_actuator``, ``free_actuator``: the data-driven actuator, a pouch
 or bellows, FONSim's FreeActuator): V(p) from a table of (p, V) points (a measured curve;
 V must not decrease), interpolated by a monotone cubic (scipy's PchipInterpolator, C¹) and
-continued linearly with its end slopes outside the table.  Signal ``V_<name>`` is the
+continued linearly with its end slopes outside the table.  Signal ``volume_<name>`` is the
 volume, mL.
 """
 from __future__ import annotations
@@ -47,7 +47,7 @@ class _ElasticVolume(StorageNode):
         return self._rho_per_p * (v + p * dv), self._rho_per_p * (2.0 * dv + p * d2v)
 
     def signals(self, t, p):
-        return {"V": ("mL", self.volume(p[..., 0])[0])}
+        return {"volume": ("mL", self.volume(p[..., 0])[0])}
 
 
 @register

@@ -21,6 +21,8 @@ from ..errors import ParameterError
 from ..laws import signed_root
 from . import register
 from .base import ElementFamily, Param
+from . import run_checks
+from .resistors import check_line
 
 _OUT_IN = np.array([1.0, -1.0])  # a flow a→b leaves node a and enters node b
 
@@ -62,7 +64,8 @@ class Orifice(_LiquidLaw):
     kind = "orifice"
     description = "liquid orifice ṁ = Cd·A·√(2ρΔp)"
     params = {
-        "diameter": Param("length", "orifice diameter, mm", low=0.0, low_inclusive=False),
+        "diameter": Param("length", "orifice diameter, mm", low=0.0, low_inclusive=False,
+                          typical=(0.05, 50.0), plausible=(0.005, 500.0)),
         "Cd": Param("dimensionless", "discharge coefficient (0.61 sharp-edged; 1/√K for a "
                     "minor-loss factor K)", low=0.0, high=2.0, low_inclusive=False,
                     default=0.61),
@@ -81,14 +84,18 @@ class Orifice(_LiquidLaw):
 
 @register
 class LaminarTube(_LiquidLaw):
+    checks_run = True
     """Tube of length L and inner diameter D in laminar flow (Hagen–Poiseuille)."""
 
     kind = "laminar_tube"
     description = "liquid laminar tube ṁ = ρπD⁴Δp/(128μL)"
     params = {
-        "length": Param("length", "tube length, mm", low=0.0, low_inclusive=False),
-        "diameter": Param("length", "inner diameter, mm", low=0.0, low_inclusive=False),
+        "length": Param("length", "tube length, mm", low=0.0, low_inclusive=False,
+                        typical=(10.0, 1e5), plausible=(1.0, 1e6)),
+        "diameter": Param("length", "inner diameter, mm", low=0.0, low_inclusive=False,
+                          typical=(0.1, 50.0), plausible=(0.01, 500.0)),
     }
+    check_spec = classmethod(lambda cls, spec: check_line(spec))
 
     def __init__(self, specs, context):
         super().__init__(specs, context)
@@ -103,4 +110,6 @@ class LaminarTube(_LiquidLaw):
         out = super().signals(t, p)
         # Re = ρ·v·D/μ = 4ṁ/(π·D·μ): ṁ mg/s → kg/s, D mm → m
         out["Re"] = ("1", 4e-3 * np.abs(out["mdot"][1]) / (np.pi * self._d * self.liquid.viscosity))
+        if np.size(t) > 1:
+            run_checks.laminar_reynolds(self.specs, t, out["Re"][1])
         return out

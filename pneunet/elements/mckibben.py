@@ -102,27 +102,31 @@ def _check(spec: ElementSpec) -> None:
 
 
 _PARAMS = {
-    "L0": Param("length", "relaxed length, mm", low=0.0, low_inclusive=False),
+    "L0": Param("length", "relaxed length, mm", low=0.0, low_inclusive=False,
+                typical=(20.0, 3000.0)),
     "D0": Param("length", "relaxed diameter, mm (with theta0)", low=0.0,
-                low_inclusive=False, default=np.nan),
+                low_inclusive=False, default=np.nan, typical=(2.0, 100.0)),
     "theta0": Param("angle", "relaxed braid angle to the axis, degrees, in (0, 54.7)",
-                    low=0.0, high=90.0, low_inclusive=False, default=np.nan),
+                    low=0.0, high=90.0, low_inclusive=False, default=np.nan,
+                    typical=(10.0, 50.0), plausible=(5.0, 54.7)),
     "b": Param("length", "thread length, mm (with n; instead of D0 and theta0)", low=0.0,
-               low_inclusive=False, default=np.nan),
+               low_inclusive=False, default=np.nan, typical=(20.0, 5000.0)),
     "n": Param("dimensionless", "turns of a thread around the muscle (with b)", low=0.0,
                low_inclusive=False, default=np.nan),
     "k_end": Param("dimensionless", "Tondu–Lopez end-effect factor k (1: ideal "
                    "Chou–Hannaford; above 1 a shorter stroke)", low=1.0, high=3.0,
                    default=1.0),
     "mass": Param("mass", "mass hanging on the muscle, kg (gravity extends it)", low=0.0,
-                  default=0.0),
-    "spring": Param("stiffness", "spring resisting contraction, N/m", low=0.0, default=0.0),
+                  default=0.0, typical=(1e-3, 50.0), plausible=(1e-6, 1e4)),
+    "spring": Param("stiffness", "spring resisting contraction, N/m", low=0.0, default=0.0,
+                    typical=(1.0, 1e6)),
     "damping": Param("damping", "viscous damping of the motion, N·s/m", low=0.0, default=0.0),
     "preload": Param("force", "constant force extending the muscle, N", default=0.0),
 }
 
 
 class _Muscle(ElementFamily):
+    checks_run = True
     """The physics shared by the parts (see module docstring); ports a, x[, v]."""
 
     params = _PARAMS

@@ -70,6 +70,20 @@ class Resistor(_QuadratureFamily):
         self._r_floats = self._r.tolist()
 
 
+def check_line(spec) -> None:
+    """A line shorter than its bore is outside every line law (fully developed flow): a
+    ParameterError; such a restriction is an orifice or a resistor."""
+    from ..errors import ParameterError
+
+    length, diameter = spec.params["length"], spec.params["diameter"]
+    if length < diameter:
+        raise ParameterError(
+            f"length {length:.4g} mm is shorter than the bore {diameter:.4g} mm: a line law "
+            "does not hold for it", where=spec.where,
+            hint="check the units (a bare number is in mm, M and m are milli, a metre is "
+                 "1m or 1meter); a restriction that short is a resistor R or an orifice")
+
+
 @register
 class Pipe(_QuadratureFamily):
     """Tube of length L and inner diameter D with Fanning friction factor f (eq. 6)."""
@@ -77,11 +91,14 @@ class Pipe(_QuadratureFamily):
     kind = "pipe"
     description = "tube resistor from length, inner diameter and friction factor (eq. 6)"
     params = {
-        "length": Param("length", "tube length, mm", low=0.0, low_inclusive=False),
-        "diameter": Param("length", "inner diameter, mm", low=0.0, low_inclusive=False),
+        "length": Param("length", "tube length, mm", low=0.0, low_inclusive=False,
+                        typical=(10.0, 1e5), plausible=(1.0, 1e6)),
+        "diameter": Param("length", "inner diameter, mm", low=0.0, low_inclusive=False,
+                          typical=(0.1, 50.0), plausible=(0.01, 500.0)),
         "f": Param("dimensionless", "Fanning friction factor (Darcy λ = 4f)", low=0.0,
                    high=1.0, low_inclusive=False, default=0.008),
     }
+    check_spec = classmethod(lambda cls, spec: check_line(spec))
 
     def __init__(self, specs, context):
         super().__init__(specs, context)

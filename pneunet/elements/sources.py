@@ -83,7 +83,8 @@ class PressureSource(ElementFamily):
     ports = ("node",)
     pinned_ports = (0,)
     params = {"value": Param("pressure", "absolute pressure or waveform, kPa", low=0.0,
-                             low_inclusive=False, kind="waveform")}
+                             low_inclusive=False, kind="waveform", typical=(20.0, 5000.0),
+                             plausible=(1.0, 1e5))}
 
     def __init__(self, specs, context):
         super().__init__(specs, context)

@@ -21,7 +21,7 @@ from ..gas import GAS_CONSTANT
 from ..laws import quadrature_flow
 from . import register
 from .base import ElementFamily, ElementSpec, Param
-from .resistors import pipe_resistance
+from .resistors import check_line, pipe_resistance
 
 #: Sutherland viscosity μ = μ0·(T/T0)^1.5·(T0 + S)/(T + S): (μ0 Pa·s, T0 K, S K)
 SUTHERLAND = {"air": (1.716e-5, 273.15, 110.4), "nitrogen": (1.663e-5, 273.15, 106.7)}
@@ -75,8 +75,10 @@ class Tube(ElementFamily):
     ports = ("a", "b")
     storage_ports = (0, 1)
     params = {
-        "length": Param("length", "tube length, mm", low=0.0, low_inclusive=False),
-        "diameter": Param("length", "inner diameter, mm", low=0.0, low_inclusive=False),
+        "length": Param("length", "tube length, mm", low=0.0, low_inclusive=False,
+                        typical=(10.0, 1e5), plausible=(1.0, 1e6)),
+        "diameter": Param("length", "inner diameter, mm", low=0.0, low_inclusive=False,
+                          typical=(0.1, 50.0), plausible=(0.01, 500.0)),
         "segments": Param("dimensionless", "number of segments (default: from L/D, 4 to 20)",
                           low=1.0, high=1000.0, default=np.nan),
         "f": Param("dimensionless", "Fanning friction factor (default: laminar/Blasius)",
@@ -85,6 +87,7 @@ class Tube(ElementFamily):
 
     @classmethod
     def check_spec(cls, spec):
+        check_line(spec)
         n = spec.params["segments"]
         if not np.isnan(n) and n != int(n):
             raise ParameterError(f"segments={n:g} must be a whole number", where=spec.where)

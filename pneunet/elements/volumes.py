@@ -102,9 +102,9 @@ class Actuator(Volume):
         "V": Param("volume", "volume, mL (or give length and diameter)", low=0.0,
                    low_inclusive=False, default=np.nan),
         "length": Param("length", "length of the cylinder, mm", low=0.0, low_inclusive=False,
-                        default=np.nan),
+                        default=np.nan, typical=(5.0, 3000.0)),
         "diameter": Param("length", "diameter of the cylinder, mm", low=0.0,
-                          low_inclusive=False, default=np.nan),
+                          low_inclusive=False, default=np.nan, typical=(1.0, 300.0)),
         "n": Volume.params["n"],
         "p0": Volume.params["p0"],
     }

@@ -282,6 +282,8 @@ def build_solution(dae, times, states, stats, branch_jumps) -> Solution:
     source flows and element signals when first read (:class:`LazySignals`)."""
     import functools
 
+    from .. import elements
+
     states = states.reshape(len(times), dae.n)
     states.setflags(write=False)  # the pressure signals are views of it, handed over uncopied
     inputs_at = left_limits(times)
@@ -302,13 +304,20 @@ def build_solution(dae, times, states, stats, branch_jumps) -> Solution:
         return {f"mdot_{name}": flow for name, flow in dae.source_flows(inputs_at, history()).items()}
     pending.update(dict.fromkeys(sources, source_flows))
     units.update(dict.fromkeys(sources, "mg/s"))
+    checked = []  # one signal of each family that checks a run (its warnings)
     for names, signal_units, compute in dae.element_signal_groups(inputs_at, states, history):
         pending.update(dict.fromkeys(names, compute))
         units.update(zip(names, signal_units))
+        spec = dae.circuit.elements.get(names[0].split("_", 1)[1])
+        if spec is not None and elements.family(spec.kind).checks_run:
+            checked.append(names[0])
     ordered = {k: pending[k] for k in fixed}  # node pressures first, as before
     ordered.update((k, v) for k, v in pending.items() if k not in ordered)
-    return Solution(times, LazySignals(ready, ordered), units, stats, dae.circuit.title,
-                    branch_jumps)
+    signals = LazySignals(ready, ordered)
+    if len(times) > 1:
+        for name in checked:
+            signals[name]  # noqa: B018 - computed now: the family's run warnings, once
+    return Solution(times, signals, units, stats, dae.circuit.title, branch_jumps)
 
 
 def left_limits(times: np.ndarray) -> np.ndarray:

@@ -9,6 +9,24 @@ from .located import did_you_mean as _close, error_at as _err
 from .syntax import Call, Word
 
 
+def signal_quantities(spec, options) -> list | None:
+    """The signal quantities (``mdot``, ``volume`` …) of element ``spec``: what its family
+    reports for one instance at ambient pressure (None if that cannot be asked)."""
+    import numpy as np
+
+    from .. import elements
+
+    family = elements.family(spec.kind)
+    found = ["mdot"] if family.pinned_ports else []   # a source's flow (the solution's)
+    try:
+        fam = family([spec], elements.FamilyContext(options))
+        p = np.full((1, 1, len(spec.nodes)), options.ambient)
+        found += [q for q in fam.signals(np.zeros(1), p) if q not in found]
+    except Exception:  # noqa: BLE001 - a plug-in that cannot be asked: not checked here
+        return None
+    return found
+
+
 class AnalysisStatements:
     """Mixin of the elaboration builder: analyses, sweeps and signal lists."""
 
@@ -112,11 +130,26 @@ class AnalysisStatements:
                 if not self.has_node(target):
                     raise _err(f"unknown node {target!r}", item.args[0],
                                _close(target, self.circuit.nodes))
-            elif target not in self.circuit.elements:
-                raise _err(f"unknown element {target!r}", item.args[0],
-                           _close(target, self.circuit.elements))
+            else:
+                target = self._element_signal(q, target, item)
             return Signal(q, target)
         raise _err(f"expected a {label} like p(node) or mdot(element), got {item}", item)
+
+    def _element_signal(self, q, target, item) -> str:
+        """The element whose signal ``q(target)`` names (a tube's flow: its first segment),
+        or an error at ``item`` listing the signals the element has, as written."""
+        elements = self.circuit.elements
+        if target not in elements and q == "mdot" and f"{target}.s1" in elements:
+            return f"{target}.s1"  # a tube: the flow at its first node
+        if target not in elements:
+            raise _err(f"unknown element {target!r}", item.args[0], _close(target, elements))
+        has = signal_quantities(elements[target], self.circuit.options)
+        if has is not None and q not in has:
+            raise _err(f"element {target!r} ({elements[target].kind}) has no signal "
+                       f"{item.name}(...)", item,
+                       "its signals: " + ", ".join(f"{s}({target})" for s in has)
+                       if has else f"a {elements[target].kind} has no signals of its own")
+        return target
 
     def _saves(self, st):
         items = st.items[1:]

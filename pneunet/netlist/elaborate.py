@@ -15,6 +15,7 @@ import re
 from .. import elements
 from ..errors import NetlistError, PneunetError, SourceSpan
 from .analyses import AnalysisStatements
+from . import plausible
 from .arrays import split_range
 from .datafiles import inline_table, read_data_file
 from .deck import Deck, Op
@@ -25,6 +26,7 @@ from .measures import MeasureStatements
 from .models import ModelCards
 from .size import check_size
 from .structure import Source
+from .waveform_calls import WaveformCalls
 from .syntax import Call, Pair, Str, Word
 from .values import (SCALE, check_number, convert, dimension_of, number_in_expression,
                      set_expression_ambient, split)
@@ -53,7 +55,7 @@ def elaborate(source: Source, overrides: dict | None = None) -> Deck:
     return _Builder(source, overrides or {}).build()
 
 
-class _Builder(ModelCards, AnalysisStatements, MeasureStatements):
+class _Builder(ModelCards, AnalysisStatements, MeasureStatements, WaveformCalls):
     def __init__(self, source: Source, overrides: dict):
         self.source = source
         self.limits = source.limits
@@ -171,6 +173,7 @@ class _Builder(ModelCards, AnalysisStatements, MeasureStatements):
                         split(it.value.text)[1].endswith("g") and split(it.value.text)[1] != "g":
                     raise _err("ambient must be an absolute pressure", it.value, "e.g. ambient=96kPa")
                 values[field_name] = self._number(it.value, slot, key, Scope(), opts)
+                plausible.check_option(key, values[field_name], it.value)
         try:
             return opts.replace(**values)
         except PneunetError as err:
@@ -286,15 +289,29 @@ class _Builder(ModelCards, AnalysisStatements, MeasureStatements):
             raise _err(f"a line must start with an element name or a directive, got {head}", head)
         rest = st.items[1:]
         kind_kw = head.text.lower()
-        family = None
-        if len(rest) >= 1 and len(kind_kw) > 1 and kind_kw in self.kind_words:
-            family = elements.family(kind_kw)
-            name_item = rest[0]
-            if not isinstance(name_item, Word):
-                raise _err(f"{head.text} needs an element name", name_item)
-            rest = rest[1:]
-        else:
-            name_item = head
+        if not (len(rest) >= 1 and len(kind_kw) > 1 and kind_kw in self.kind_words):
+            return self._elements(st, head, head, None, rest, scope, prefix, nodemap, stack)
+        family = elements.family(kind_kw)
+        if not isinstance(rest[0], Word):
+            raise _err(f"{head.text} needs an element name", rest[0])
+        try:
+            return self._elements(st, head, rest[0], family, rest[1:], scope, prefix, nodemap,
+                                  stack)
+        except NetlistError as err:
+            # `Vt tank 50mL`: the first word is a short kind word (VT) and an element name
+            if len(kind_kw) > 3 or not _element_letter(head.text):
+                raise
+            try:
+                return self._elements(st, head, head, None, rest, scope, prefix, nodemap, stack)
+            except NetlistError:
+                pass
+            read = (f"the line was read as a {family.kind} (kind word {head.text!r}) named "
+                    f"{rest[0].text!r}; as an element named {head.text!r} it fails too")
+            raise NetlistError(err.message, span=err.span,
+                               hint=f"{err.hint}; {read}" if err.hint else read) from None
+
+    def _elements(self, st, head, name_item, family, rest, scope, prefix, nodemap, stack):
+        """The element (or array of elements) named by ``name_item``."""
         name_text = self._subst(name_item, scope)
         base, indices = split_range(name_text, name_item, self.limits) or (name_text, [None])
         for idx in indices:
@@ -362,6 +379,15 @@ class _Builder(ModelCards, AnalysisStatements, MeasureStatements):
         given: dict[str, object] = {}
         items: dict[str, object] = {}
         extra = positional[n_ports:]
+        for i, it in enumerate(extra):  # `length=3 m`, `R1 a b 1 kPa*s/mg`: a unit apart
+            if i < len(names) and family.params[names[i]].kind == "object":
+                continue  # a model name (`X1 a b c m`)
+            if isinstance(it, Word) and split(it.text) is None and "{" not in it.text and \
+                    (dimension_of(it.text) or it.text.lower() in SCALE) and \
+                    scope.lookup(it.text) is None:
+                raise _err(f"{family.kind} {full}: unit {it.text!r} without a number", it,
+                           f"remove the space between the number and its unit: 3{it.text}, "
+                           f"not 3 {it.text} (also after key=)")
         if len(extra) > len(names):
             bad = extra[len(names)]
             hint = None
@@ -442,71 +468,8 @@ class _Builder(ModelCards, AnalysisStatements, MeasureStatements):
             spec.check(value, label, key)
         except PneunetError as err:
             raise _err(f"{family.kind} {full}: {err.message}", item, err.hint) from None
+        plausible.check(spec, key, value, item.text, item.span, key)
         return value
-
-    def _waveform(self, call: Call, slot, scope, label):
-        from .. import waveforms as wf
-
-        kind = call.name.upper()
-        diff = "pressure_difference" if slot == "pressure" else slot
-        layouts = {
-            "STEP": (wf.Step, [("initial", slot), ("final", slot), ("at", "time"), ("rise", "time")], 2),
-            "PULSE": (wf.Pulse, [("low", slot), ("high", slot), ("delay", "time"), ("rise", "time"),
-                                 ("fall", "time"), ("width", "time"), ("period", "time")], 2),
-            "SIN": (wf.Sine, [("offset", slot), ("amplitude", diff), ("frequency", "frequency"),
-                              ("delay", "time"), ("damping", "frequency"),
-                              ("phase", "dimensionless")], 3),
-        }
-        if kind == "PWL" and len(call.args) == 1 and isinstance(call.args[0], Pair) and \
-                isinstance(call.args[0].key, Word) and call.args[0].key.text.lower() == "file":
-            times, values = read_data_file(call.args[0].value, self.source.policy,
-                                           ("time", slot), self.options, label, strict=False)
-            return wf.PiecewiseLinear(tuple(times), tuple(values))
-        if kind == "PWL":
-            args = call.args
-            if any(isinstance(a, Pair) for a in args):
-                raise _err("PWL takes time value pairs", call)
-            if len(args) < 2 or len(args) % 2:
-                raise _err(f"PWL needs pairs of time and value, got {len(args)} number(s)", call,
-                           "e.g. PWL(0 96kPa 1 296kPa 2 296kPa)")
-            times = [self._number(a, "time", "PWL time", scope) for a in args[0::2]]
-            values = [self._number(a, slot, "PWL value", scope) for a in args[1::2]]
-            for i in range(1, len(times)):
-                if times[i] < times[i - 1]:
-                    raise _err("PWL times must not decrease", args[2 * i],
-                               "write corners in time order: PWL(0 96 1 200 …)")
-            return wf.PiecewiseLinear(tuple(times), tuple(values))
-        if kind == "DC" and len(call.args) == 1:
-            return self._number(call.args[0], slot, label, scope)
-        if kind not in layouts:
-            raise _err(f"unknown waveform {call.name!r}", call,
-                       _close(kind, list(layouts) + ["PWL"]) or "known: STEP, PULSE, PWL, SIN")
-        cls, fields_, required = layouts[kind]
-        values, pos = {}, 0
-        for a in call.args:
-            if isinstance(a, Pair):
-                k = a.key.text.lower() if isinstance(a.key, Word) else ""
-                match = [f for f in fields_ if f[0] == k]
-                if not match:
-                    raise _err(f"unknown {kind} argument {k!r}", a.key,
-                               _close(k, [f[0] for f in fields_]) or
-                               "known: " + ", ".join(f[0] for f in fields_))
-                f = match[0]
-                values[f[0]] = self._number(a.value, f[1], f"{kind} {f[0]}", scope)
-            else:
-                if pos >= len(fields_):
-                    raise _err(f"too many arguments for {kind} (at most {len(fields_)})", a)
-                f = fields_[pos]
-                values[f[0]] = self._number(a, f[1], f"{kind} {f[0]}", scope)
-                pos += 1
-        missing = [f[0] for f in fields_[:required] if f[0] not in values]
-        if missing:
-            raise _err(f"{kind} needs {', '.join(missing)}", call,
-                       f"{kind}(" + " ".join(f[0] for f in fields_) + ")")
-        try:
-            return cls(**values)
-        except PneunetError as err:
-            raise _err(err.message, call, err.hint) from None
 
     def _instance(self, st, name_item, name, positional, pairs, scope, prefix, nodemap, stack,
                   idx, indices):
@@ -585,6 +548,15 @@ def _kind_keywords():
         out.add(k.lower())
         out.update(a.lower() for a in fam.aliases if len(a) > 1)
     return out
+
+
+def _element_letter(word: str) -> bool:
+    """Whether ``word``'s first letter names an element family (``Vt``: a volume)."""
+    try:
+        elements.family(word[0])
+    except PneunetError:
+        return False
+    return True
 
 
 def _fmt_int(value: float) -> str:

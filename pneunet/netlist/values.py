@@ -119,7 +119,8 @@ def convert(text: str, slot: str, span: SourceSpan, *, name: str, ambient: float
 
 #: internal units tried, in order, for a unit in an expression or a .param value
 _DIMENSION_ORDER = ("pressure", "flow", "resistance", "volume", "length", "time",
-                    "temperature", "frequency")
+                    "temperature", "frequency", "compliance", "mass", "force", "stiffness",
+                    "damping", "angle")
 
 
 def number_in_expression(text: str, span: SourceSpan, ambient: float = 101.325) -> float:
@@ -128,17 +129,41 @@ def number_in_expression(text: str, span: SourceSpan, ambient: float = 101.325) 
     if not suffix:
         return magnitude
     if suffix.lower() in SCALE:
+        if suffix in ("g", "t", "N"):
+            _ambiguous_scale(text, suffix, span)
         return magnitude * SCALE[suffix.lower()]
     from ..units import GAUGE_UNITS, to_internal
 
     gauge = suffix in GAUGE_UNITS
     unit = suffix[:-1] if gauge else suffix
-    for slot in _DIMENSION_ORDER:
+    # N·s/m (a damping) has the dimension of a mass flow: a unit with newtons is mechanical
+    order = _MECHANICAL_FIRST if "N" in unit else _DIMENSION_ORDER
+    for slot in order:
         if _unit_dimension_matches(unit, slot):
             return float(to_internal(magnitude, unit, slot, gauge=gauge,
                                      ambient_kpa=_AMBIENT.get("kPa", ambient)))
     raise NetlistError(f"unknown unit or scale factor {_cut(suffix)!r} in {_cut(text)!r}",
-                       span=span, hint="scale factors: f p n u m k meg g t; units: kPa, mL, ms, ...")
+                       span=span, hint="scale factors: f p n u m k meg g t; units of every "
+                                       "parameter: kPa, mg/s, kPa*s/mg, mL, mm, s, K, Hz, "
+                                       "mL/kPa, kg, N, N/m, N*s/m, deg")
+
+
+_MECHANICAL_FIRST = ("force", "stiffness", "damping", *_DIMENSION_ORDER)
+
+
+def _ambiguous_scale(text, suffix, span) -> None:
+    """A located warning: ``200g``, ``2t``, ``5N`` in an expression are SPICE giga, tera,
+    nano (no pneumatic quantity is that large or small), not gram, tonne, newton."""
+    import warnings
+
+    from ..errors import InputWarning
+
+    unit = {"g": "gram", "t": "tonne", "N": "newton"}[suffix]
+    warnings.warn(InputWarning(
+        f"{text} in an expression or .param is {split(text)[0]:g}·{SCALE[suffix.lower()]:g} "
+        f"(SPICE scale factor {suffix!r}), not {unit}s", span=span,
+        hint=f"for {unit}s write the unit out ({split(text)[0]:g}{unit}) or give the value "
+             "where it is used (mass=200g, preload=5N)"), stacklevel=4)
 
 
 # ambient pressure used for gauge units inside expressions (set while elaborating)

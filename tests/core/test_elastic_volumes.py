@@ -42,7 +42,7 @@ def _compare(sol, volume_and_slope):
 def test_accumulator_fill_matches_the_integrated_capacitance():
     sol = _fill(lambda c: c.accumulator("A1", "b", V0=V0, k=K, pref=PREF))
     _compare(sol, lambda p: (V0 + K * (p - PREF), K))
-    np.testing.assert_allclose(sol.signals["V_A1"], V0 + K * (sol.pressure("b") - PREF))
+    np.testing.assert_allclose(sol.signals["volume_A1"], V0 + K * (sol.pressure("b") - PREF))
     # the compliance matters: the same volume held rigid fills visibly faster
     rigid = reference_fill(sol.t[1:30], lambda p: (V0 + K * (p - PREF), 0.0))
     assert np.max(np.abs(rigid - sol.pressure("b")[1:30])) > 1.0

@@ -55,10 +55,10 @@ def test_bellows_from_csv_fills_as_its_stored_mass_says(tmp_path, kind):
     np.testing.assert_allclose(sol.pressure("b")[early], reference_fill(sol.t[early]),
                                rtol=1e-5)
     volume = PchipInterpolator(BELLOWS_KPAG + AMBIENT, BELLOWS_ML)
-    np.testing.assert_allclose(sol.signals["V_A1"], volume(sol.pressure("b")), rtol=1e-9)
+    np.testing.assert_allclose(sol.signals["volume_A1"], volume(sol.pressure("b")), rtol=1e-9)
     # it takes in the air of its growing volume: at the supply, (400·99.5 − 100·30)/(300·30)
     # = 4.09 × what a rigid tank of its relaxed volume would
-    stored = RHO_PER_P * (sol.pressure("b")[-1] * sol.signals["V_A1"][-1]
+    stored = RHO_PER_P * (sol.pressure("b")[-1] * sol.signals["volume_A1"][-1]
                           - AMBIENT * BELLOWS_ML[0])
     rigid = RHO_PER_P * (sol.pressure("b")[-1] - AMBIENT) * BELLOWS_ML[0]
     assert stored / rigid == pytest.approx(4.09, abs=0.02)
