@@ -25,6 +25,7 @@ def register(subparsers) -> None:
     p.add_argument("--vary", action="append", default=[], metavar="NAME=LOW:HIGH",
                    help="a searched parameter (a .param name or ELEMENT.PARAM such as "
                         "Vtank.V), 0 < LOW < HIGH; repeatable")
+    netlist_args.add_param(p)
     p.add_argument("--target", action="append", default=[], metavar="SPEC",
                    help="period=3s, period=3s±0.1s, duty=0.4±10%%, swing>=130kPa, "
                         "p_min@out<=190kPa, or any .meas name of the netlist; repeatable "
@@ -90,10 +91,11 @@ def main(args) -> int:
     for path, what in ((args.tornado, "tornado plot"), (args.samples, "samples table")):
         if path:
             check_writable(path, what, "choose a writable file")
+    fixed = netlist_args.params(args.param)  # given values: checked (and their yield)
     build = NetlistBuilder(args.netlist, parse=netlist_args.parse_options(args))
     progress = not (args.no_progress or args.json or args.quiet)
     with dask_or_local(args.dask, args.workers) as executor:
-        problem = Problem(build, args.target, node=args.node, workers=args.workers,
+        problem = Problem(build, args.target, node=args.node, workers=args.workers, fixed=fixed,
                           executor=executor, progress=progress)
         if args.n_yield and not (tolerances or fits):
             raise ParameterError(no_uncertainty(build), hint=spread_hint())
@@ -102,7 +104,7 @@ def main(args) -> int:
                 result = design(problem, ranges, n_start=args.starts,
                                 max_nfev=args.max_evaluations, seed=args.seed)
             else:
-                result = evaluate(problem)
+                result = evaluate(problem, fixed)
             out = result.to_json()
             if args.n_yield:
                 spread = combined(problem, result.values, tolerances, fits,

@@ -23,6 +23,37 @@ def add_limit(parser) -> None:
                              "(names and defaults: docs/netlist.md, 'Limits')")
 
 
+def add_param(parser) -> None:
+    """``--param NAME=VALUE``: a ``.param`` value for this run (read with :func:`params`)."""
+    parser.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
+                        help="set a .param for this run (repeatable), e.g. --param Rout=1.4 "
+                             "--param V=200mL; units as in .param")
+
+
+def params(items) -> dict:
+    """``{name: value}`` in internal units from ``NAME=VALUE`` strings (exit 2 if bad)."""
+    import math
+
+    from ..errors import NetlistError, ParameterError, SourceSpan
+    from ..netlist.values import number_in_expression, split
+
+    out = {}
+    for item in items:
+        name, eq, text = item.partition("=")
+        name = name.strip()
+        if not eq or not name or split(text.strip()) is None:
+            raise ParameterError(f"--param {item!r}: expected NAME=VALUE",
+                                 hint="e.g. --param Rout=1.4 or --param V=200mL")
+        try:
+            value = number_in_expression(text.strip(), SourceSpan("--param", 1, 1))
+        except NetlistError as err:
+            raise ParameterError(f"--param {item!r}: {err.message}", hint=err.hint) from None
+        if not math.isfinite(value):
+            raise ParameterError(f"--param {item!r}: not a finite number")
+        out[name] = value
+    return out
+
+
 def limits(args):
     """The limits with the command's ``--limit`` changes (an unknown name is exit 2)."""
     from ..netlist.limits import DEFAULT

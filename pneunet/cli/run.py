@@ -21,6 +21,7 @@ def register(subparsers) -> None:
     p.add_argument("netlist", metavar="FILE.pn", help="netlist file")
     p.add_argument("-o", "--output", metavar="DIR", default=None, type=output_folder,
                    help="output folder (default: ./<netlist name>_results)")
+    netlist_args.add_param(p)
     p.add_argument("--plot", action="store_true", help="also write a PNG plot per transient")
     p.add_argument("--json", action="store_true",
                    help="print measurements and written files as JSON on stdout")
@@ -44,7 +45,8 @@ def _check_saves(saves, columns, path) -> None:
 
     for signal in saves:
         if not any(c == signal.key or c.startswith(signal.key + "_") for c in columns):
-            mine = sorted(c for c in columns if f"_{signal.target}_" in c)
+            mine = sorted(f"{c.split('_' + signal.target + '_')[0]}({signal.target})"
+                          for c in columns if f"_{signal.target}_" in c)
             raise NetlistError(f".save {signal}: element {signal.target!r} has no signal "
                                f"{signal.quantity!r}", where=str(path),
                                hint="its signals: " + ", ".join(mine) if mine else None)
@@ -66,7 +68,7 @@ def main(args) -> int:
     from ..engine.solution import write_csv
 
     path = Path(args.netlist)
-    deck = parse_file(path, **netlist_args.parse_options(args))
+    deck = parse_file(path, netlist_args.params(args.param), **netlist_args.parse_options(args))
     deck.validate()
     netlist_args.check_nodes(deck.circuit, args.strict)
     points = deck.step_points()
