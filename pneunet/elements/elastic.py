@@ -24,7 +24,7 @@ from .base import Param
 from .volumes import StorageNode
 
 _P0 = Param("pressure", "initial absolute pressure, kPa (default: ambient)", low=0.0,
-            low_inclusive=False, default=np.nan)
+            low_inclusive=False, default=np.nan, typical=(20.0, 5000.0))
 
 
 class _ElasticVolume(StorageNode):

@@ -58,7 +58,7 @@ class ThermalVolume(ElementFamily):
                          "conductance: 0 constant hA (Simscape, Modelica), 1 constant τ",
                          low=0.0, high=1.0, default=0.0),
         "p0": Param("pressure", "initial absolute pressure, kPa (default: ambient)", low=0.0,
-                    low_inclusive=False, default=np.nan),
+                    low_inclusive=False, default=np.nan, typical=(20.0, 5000.0)),
     }
 
     def __init__(self, specs, context):
@@ -188,7 +188,7 @@ class ThermalInlet(ElementFamily):
         "r": Param("resistance", "link resistance, kPa·s/mg (small)", low=0.0,
                    low_inclusive=False, default=1e-5),
         "p0": Param("pressure", "the chamber's p0, kPa (default: ambient)", low=0.0,
-                    low_inclusive=False, default=np.nan),
+                    low_inclusive=False, default=np.nan, typical=(20.0, 5000.0)),
     }
 
     def __init__(self, specs, context):

@@ -58,7 +58,7 @@ class Volume(StorageNode):
         "n": Param("dimensionless", "polytropic exponent (1 isothermal, 1.4 adiabatic air)",
                    low=1.0, high=1.4, default=1.0),
         "p0": Param("pressure", "initial absolute pressure, kPa (default: ambient)", low=0.0,
-                    low_inclusive=False, default=np.nan),
+                    low_inclusive=False, default=np.nan, typical=(20.0, 5000.0)),
     }
 
     def __init__(self, specs, context):

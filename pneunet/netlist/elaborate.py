@@ -534,6 +534,7 @@ class _Builder(ModelCards, AnalysisStatements, MeasureStatements, WaveformCalls)
                 raise _err(f"initial pressure of {node} = {value:g} kPa: an absolute pressure "
                            "must be > 0 (as for p0)", it.value,
                            "pressures are absolute; a gauge pressure carries a g: 100kPag")
+            plausible.check_level(value, it.value, node)
             node = self._node(node, prefix, nodemap)
             if not self.has_node(node):
                 raise _err(f"initial condition for unknown node {node!r}", key,

@@ -130,3 +130,10 @@ def test_a_pressure_level_and_an_option_far_from_the_usual_warn():
     _, found = _warnings(".options temperature=20degC ambient=96kPa\n" + HEAD +
                          "P2 c PWL(0 100kPa 1 3bar)\nR1 a b 1\nVb b 1mL\nR2 c b 1\n.tran 1s\n")
     assert found == []
+
+
+def test_an_initial_pressure_far_from_the_usual_warns_where_it_is_written():
+    _, found = _warnings(HEAD + "R1 a b 1\nVb b 1mL p0=3\n.ic b=5\n.tran 1s\n")
+    assert [(w.span.line, w.span.column) for w in found] == [(3, 13), (4, 7)]
+    assert found[0].hint.startswith("did you mean 3bar (300 kPa)")
+    assert _warnings(HEAD + "R1 a b 1\nVb b 1mL p0=3bar\n.ic b=150kPa\n.tran 1s\n")[1] == []
