@@ -22,7 +22,7 @@ from ..reprs import Summarized, listed, number
 from ..truth.intervals import intervals
 from ..truth.lsq import least_squares_log
 from .align import Alignment
-from .data import compared_samples, oscillates, read_trace, signal_of_column
+from .data import compared_samples, read_trace, signal_of_column, swings
 from .initial_state import StartState, choose_start
 from .model import DIFF_STEP, FIT_OPTIONS, TraceModel, TraceResidual, sample_at
 
@@ -217,7 +217,7 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
     if x_start is not None:
         x0 = np.clip(np.log([x_start.get(k, params[k][0]) for k in names]), lb, ub)
         stage1 = {"method": "given"}
-    elif features and node and f"p_{node}" in meas and oscillates(t_fit, meas[f"p_{node}"][mask]):
+    elif features and node and f"p_{node}" in meas and swings(meas[f"p_{node}"][mask]):
         try:
             x0, stage1 = initial_values(model, names, x0, lb, ub, t_fit, meas[f"p_{node}"][mask],
                                         node)
