@@ -51,9 +51,9 @@ PARAMS = {"Rout": (1.4, 0.3, 5.0), "Rvent": (3.8, 0.5, 20.0), "V": (65.0, 5.0, 5
 DRIVEN = {
     "clean": ({}, "adequate"),
     "heat-transfer": ({"heat_tau": 1.0}, "volume_heat_transfer"),
-    "dead-volume": ({"V_act": 3.0}, "dead_volume@act"),
-    "control-tube": ({"tube_ctrl": (20.0, 10.0)}, "tube@Xin.ctrl"),
-    "heat+control-tube": ({"heat_tau": 1.0, "tube_ctrl": (20.0, 10.0)},
+    "dead-volume": ({"V_act": 6.0}, "dead_volume@act"),
+    "control-tube": ({"tube_ctrl": (5.0, 5.0)}, "tube@Xin.ctrl"),
+    "heat+control-tube": ({"heat_tau": 1.0, "tube_ctrl": (5.0, 5.0)},
                           "volume_heat_transfer + tube@Xin.ctrl"),
     "leak": ({"leak": 40.0}, "unexplained"),
     "compliant": ({"compliance": 0.004}, "unexplained"),

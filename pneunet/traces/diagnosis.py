@@ -225,6 +225,10 @@ class _ScreenTask:
         return x[:len(self.x_base)] if info.get("method") != "none" else self.x_base
 
 
+#: the screen's second and third best are fitted fully when their merit (fit-window
+#: residual sum of squares) is within this factor of the best's (rms within 1.5×, the
+#: verdict's tolerance): a clear screen costs one full fit, a close one three
+SCREEN_KEEP = 2.25
 #: largest change of a base parameter (ln value) in one screening step, and the steps
 SCREEN_STEP = 0.25
 SCREEN_STEPS = 1
@@ -262,9 +266,10 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
     as in :func:`~pneunet.traces.fit.fit_trace` (one start state, chosen for the base
     fit, serves every fit); ``effects``: candidate effects (kinds,
     bound effects or their names; default every registered one at every site);
-    ``screen``: how many of the best screened candidates are then fitted fully
-    (4 × ``max_nfev``: they have more parameters and start further away; each from its
-    screen's best point and, when that fit stays above the floor, from a second start);
+    ``screen``: how many of the best screened candidates may be fitted fully (those
+    whose screen merit is within :data:`SCREEN_KEEP` of the best's; 4 × ``max_nfev``:
+    they have more parameters and start further away), each from its screen's best
+    point, and when none reaches the floor each again from a second start;
     ``workers``: processes
     for parallel finite differences (None: 2 where there are 2 cores); ``progress``:
     a callable taking a message (e.g. ``print`` to stderr)."""
@@ -318,16 +323,34 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
             timing["screen_s"] = time.perf_counter() - t0
             timing["screen_simulations"] = sum(r["simulations"] for r in rows)
             t0 = time.perf_counter()
-            for row in rows[:screen]:
+            close = [r for r in rows[:screen]
+                     if r["rss"] <= SCREEN_KEEP * rows[0]["rss"] or r is rows[0]]
+            for row in close:
                 eff = row["effect"]
                 if not math.isfinite(row["rss"]):
                     fitting.failed[eff.name] = ("not fitted: the circuit could not be simulated "
                                                 "at any point of its parameter range")
                     continue
                 say(f"fitting {eff.name}")
-                fit = fitting.single(eff, row, 4 * max_nfev)
+                fit = fitting.start(eff, row["x"], 4 * max_nfev)
                 if fit is not None:
                     fits[eff.name] = fit
+            # none at the floor: a second start for each fitted one, best first
+            by_error = sorted((n for n in fits if n != "none"), key=lambda n: fits[n].error(test))
+            if not any(at_floor(fits[n].error(test), floor, tolerance) for n in by_error):
+                for row in close:
+                    eff = row["effect"]
+                    if eff.name not in fits and eff.name not in fitting.failed:
+                        continue
+                    say(f"fitting {eff.name} from a second start")
+                    fit = fitting.start(eff, {k: _second_start(v, row["x"].get(k))
+                                              for k, v in eff.params.items()}, 4 * max_nfev)
+                    if fit is not None and (eff.name not in fits or fit.error(test)
+                                            < fits[eff.name].error(test)):
+                        fits[eff.name] = fit
+                        fitting.failed.pop(eff.name, None)
+                    if fit is not None and at_floor(fit.error(test), floor, tolerance):
+                        break
             timing["candidate_fits_s"] = time.perf_counter() - t0
             fitted = sorted((n for n in fits if n != "none"), key=lambda n: fits[n].error(test))
             ranking += [_row(n, fits[n], test, floor, fitting.starts.get(n))
@@ -371,18 +394,19 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
         if pool is not None:
             pool.shutdown()
     timing["total_s"] = time.perf_counter() - wall
-    timing["simulations"] = sum(f.extras.get("simulations", 0) for f in fits.values()) \
-        + fitting.extra_simulations
+    # every fit tried, kept or not (the screen's are in screen_simulations)
+    timing["simulations"] = sum(f.extras.get("simulations", 0) for n, f in fits.items()
+                                if n == "none" or " + " in n) \
+        + sum(st["simulations"] or 0 for tried in fitting.starts.values() for st in tried)
     wf = Waterfall(steps, floor, unit)
     return TraceDiagnosis(verdict, accepted, floor, unit, ranking, fits, wf, where_txt,
                           {k: v for k, v in noise.items()}, train, test, timing, notes)
 
 
 class _Fitting:
-    """The full fits of candidate effects within one diagnosis: each from its screen's
-    best point and, when that stays above the floor (or stops at a bound, or fails),
-    from a second start (the effect's own guess, or its range's log-middle); pairs
-    started from each single fit's own values."""
+    """The full fits of candidate effects within one diagnosis (each from given starting
+    values: the screen's best point, or a second start, the effect's own guess or its
+    range's log-middle); pairs started from each single fit's own values."""
 
     def __init__(self, build, df, params, fixed, node, train, test, base, pool, options,
                  where, state, floor, tolerance):
@@ -390,8 +414,7 @@ class _Fitting:
         self.train, self.test, self.base, self.pool, self.options = train, test, base, pool, options
         self.where, self.state, self.floor, self.tolerance = where, state, floor, tolerance
         self.failed = {}  # effect name -> why it has no fit
-        self.starts = {}  # effect name -> [{start values, held-out rms}] tried
-        self.extra_simulations = 0  # of fits tried and not kept
+        self.starts = {}  # effect name -> [{start values, held-out rms, simulations}]
 
     def _fit(self, effs, x_start, max_nfev):
         p = {k: (float(np.clip(self.base.values[k], lo, hi)), lo, hi)
@@ -407,34 +430,19 @@ class _Fitting:
                          options=self.options, x_start=x, where=self.where,
                          start_state=self.state)
 
-    def single(self, eff, row, max_nfev) -> TraceFit | None:
-        """The better (held-out) of the fits from the screen's best point and, when
-        needed, a second start; None (and a reason in ``failed``) when both fail."""
-        tried, best, errors = [], None, []
-        for x_start in (row["x"], None):
-            if x_start is None:
-                if best is not None and at_floor(best.error(self.test), self.floor,
-                                                 self.tolerance) \
-                        and not _at_bound(best, self.params):
-                    break
-                x_start = {k: _second_start(v, row["x"].get(k)) for k, v in eff.params.items()}
-            try:
-                fit = self._fit((eff,), x_start, max_nfev)
-            except SolverError as err:
-                errors.append(str(err))
-                continue
-            tried.append({"start": {k: float(x_start[k]) for k in eff.params if k in x_start},
-                          "held_out_rms": fit.error(self.test)})
-            if best is None or fit.error(self.test) < best.error(self.test):
-                if best is not None:
-                    self.extra_simulations += best.extras.get("simulations", 0)
-                best = fit
-            else:
-                self.extra_simulations += fit.extras.get("simulations", 0)
-        self.starts[eff.name] = tried
-        if best is None:
-            self.failed[eff.name] = "fit failed: " + "; ".join(errors)
-        return best
+    def start(self, eff, x_start, max_nfev) -> TraceFit | None:
+        """The fit of ``eff`` from ``x_start`` (its parameters; the base ones from the
+        base fit's or the screen's); None (and why in ``failed``) when it fails.  Every
+        start is listed in ``starts``."""
+        try:
+            fit = self._fit((eff,), x_start, max_nfev)
+        except SolverError as err:
+            self.failed.setdefault(eff.name, f"fit failed: {err}")
+            return None
+        self.starts.setdefault(eff.name, []).append(
+            {"start": {k: float(x_start[k]) for k in eff.params if k in x_start},
+             "held_out_rms": fit.error(self.test), "simulations": fit.extras.get("simulations")})
+        return fit
 
     def pair(self, first: TraceFit, second: TraceFit, max_nfev, notes) -> TraceFit | None:
         """Both effects at once, started from ``first``'s values with ``second``'s own

@@ -75,9 +75,9 @@ def test_clean_driven_recording_is_adequate_and_covered():
 
 @pytest.mark.parametrize("case, expected", [
     ((("heat_tau", 1.0),), {"volume_heat_transfer"}),
-    ((("V_act", 3.0),), {"dead_volume@act"}),
-    ((("tube_ctrl", (20.0, 10.0)),), {"tube@Xin.ctrl"}),
-    ((("heat_tau", 1.0), ("tube_ctrl", (20.0, 10.0))), {"volume_heat_transfer", "tube@Xin.ctrl"}),
+    ((("V_act", 6.0),), {"dead_volume@act"}),
+    ((("tube_ctrl", (5.0, 5.0)),), {"tube@Xin.ctrl"}),
+    ((("heat_tau", 1.0), ("tube_ctrl", (5.0, 5.0))), {"volume_heat_transfer", "tube@Xin.ctrl"}),
 ])
 def test_driven_hidden_effect_is_named(case, expected):
     d = driven(case)
