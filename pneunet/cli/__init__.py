@@ -4,7 +4,8 @@ Each sub-command module defines ``register(subparsers)``, which adds its parser
 and sets ``func(args) -> int`` as default.  Errors derived from
 :class:`~pneunet.errors.PneunetError` become a message and an exit code
 (0 ok, 1 every point of a sweep failed, 2 bad input, an unwritable output or a
-simulation that cannot be completed, 141 a closed pipe); no traceback reaches the user.
+simulation that cannot be completed); a closed pipe (``| head``) ends quietly with 0; no
+traceback reaches the user.
 """
 from __future__ import annotations
 
@@ -126,10 +127,10 @@ def _named_stdout():
 
 
 def _closed_pipe() -> int:
-    """The reader of stdout went away (``| head``): stop quietly, as a tool killed by
-    SIGPIPE does (exit 141)."""
+    """The reader of stdout went away (``| head``): it took what it wanted, so stop
+    quietly with exit 0 (not the shell's 141 of a tool killed by SIGPIPE)."""
     _drop_stdout()
-    return 141
+    return 0
 
 
 def _drop_stdout() -> None:
