@@ -116,7 +116,9 @@ def _continuation(residual_jac, y, active, scale, capacitance, tol, max_iter, fl
             dtau *= 0.25
             continue
         y = trial
-        dtau = min(dtau * max(norm / max(norm_trial, 1e-300), 0.5) * 1.5, 1e12)
+        # the growth capped before it multiplies: a residual that falls to ~0 gives a
+        # ratio near 1e300, whose product overflowed (a raw numpy warning)
+        dtau = min(dtau * min(max(norm / max(norm_trial, 1e-300), 0.5), 1e12) * 1.5, 1e12)
         norm = norm_trial
         if np.max(np.abs(step) / scale) < tol and norm < 1e-6 * max(flow_scale, norm0):
             return NewtonResult(y, True, it + 1, norm)
