@@ -16,8 +16,8 @@ import sys
 import warnings
 
 #: sub-command modules, in the order ``pneunet --help`` lists them
-SUBCOMMAND_MODULES = ("run", "check", "fit", "diagnose", "sweep", "branches", "fit_trace",
-                       "design", "piping")
+SUBCOMMAND_MODULES = ("run", "check", "draw", "fit", "diagnose", "sweep", "branches",
+                       "fit_trace", "design", "piping")
 
 
 def build_parser() -> argparse.ArgumentParser:
