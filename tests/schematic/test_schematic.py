@@ -1,0 +1,235 @@
+"""Issue 36: every shipped circuit draws without overlapping symbols or labels, with every
+element and node named on it; arrays are drawn once with their count; --op and --at write
+the analysis' own numbers on the drawing."""
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+from xml.etree import ElementTree
+
+import pytest
+
+from pneunet import Circuit
+from pneunet.cli import main
+from pneunet.netlist import parse_file, parse_netlist
+from pneunet.paper_circuits import flow_amplifier
+from pneunet.schematic import collapse, draw
+from pneunet.schematic.geometry import Layout
+
+ROOT = Path(__file__).resolve().parents[2]
+NETLISTS = sorted((ROOT / "netlists").glob("*.pn")) + sorted((ROOT / "examples").rglob("*.pn"))
+SVG = "{http://www.w3.org/2000/svg}"
+#: one element of every built-in kind (tests/netlist/test_every_signal.py)
+EVERY_KIND = """P1 supply 300kPa
+F1 atm supply 10mg/s
+R1 supply a 1
+pipe T1 a b length=1m diameter=4mm
+tube L1 b c length=1m diameter=2mm
+V1 c 5mL
+A1 c V=10mL
+X1 supply out c axi
+Vout out 2mL
+D1 supply d 0.5 pcrack=10kPa
+hysteretic_check_valve D2 supply e d2s R=0.5 pcrack=30kPa preseat=10kPa width=1kPa
+Vd d 2mL
+Ve e 2mL
+accumulator C1 a 20mL 0.1mL/kPa
+pv_actuator P2 b table=TABLE(1bar 20mL 2bar 30mL 3bar 35mL)
+VT VT1 c heat 5mL tau=0.2
+mckibben M1 c L0=20cm D0=12mm theta0=25deg mass=200g damping=20N*s/m
+R2 e atm 2
+R3 d atm 2
+R4 b f 1
+Vf f 1mL
+X2 f atm atm axi
+.tran 10ms 0.2s
+"""
+LIQUID = """.options fluid=water
+P1 pump 3bar
+orifice O1 pump act 0.5mm
+accumulator A1 act 20mL 0.05mL/kPa
+laminar_tube T1 act atm length=1m diameter=1mm
+"""
+
+
+def _examples():
+    sys.path.insert(0, str(ROOT / "examples" / "oscillator"))
+    try:
+        from oscillator import build
+    finally:
+        sys.path.pop(0)
+    return {"examples/oscillator": build(1.132), "examples/amplifier": flow_amplifier("mirror")}
+
+
+CIRCUITS = ({p.relative_to(ROOT).as_posix(): p for p in NETLISTS}
+            | {"every kind": EVERY_KIND, "liquid kinds": LIQUID} | dict.fromkeys(("examples/oscillator",
+                                                           "examples/amplifier")))
+
+
+def _circuit(name):
+    if name in ("every kind", "liquid kinds"):
+        return parse_netlist(CIRCUITS[name]).circuit
+    if name.startswith("examples/") and not name.endswith(".pn"):
+        return _examples()[name]
+    return parse_file(CIRCUITS[name]).circuit
+
+
+def _texts(svg: str) -> list[str]:
+    return [t.text for t in ElementTree.fromstring(svg).iter(SVG + "text")]
+
+
+@pytest.mark.parametrize("name", list(CIRCUITS))
+def test_every_circuit_draws_without_overlaps_and_names_everything(name):
+    circuit = _circuit(name)
+    lay = draw(circuit)
+    assert lay.overlaps() == []
+    texts = _texts(lay.svg)
+    sch = collapse(circuit)
+    # every element is drawn by exactly one part; a lone element under its own name
+    drawn = [n for part in sch.parts.values() for n in part.names]
+    assert sorted(drawn) == sorted(circuit.elements)
+    for part in sch.parts.values():
+        shown = [t for t in texts if t.split(" ×")[0] == part.label]
+        assert shown, part.label
+        if "[" not in part.label and part.segments == 1:
+            assert part.names == [part.label]
+        assert (f" ×{part.count}" in shown[0]) == (part.count > 1)
+    # every node (but the reference, drawn as exhausts) is named, arrays by their ranges
+    pneumatic = {n for e in circuit.elements.values() for n, port in
+                 zip(e.nodes, __import__("pneunet").elements.family(e.kind).ports)
+                 if port not in ("x", "v", "heat", "state") and not circuit.is_reference(n)}
+    tubes = {e.name.rpartition(".s")[0] for e in circuit.elements.values() if e.kind == "tube"}
+    for node in {n for n in pneumatic if not re.fullmatch(r"(.+)\.\d+", n)
+                 or re.fullmatch(r"(.+)\.\d+", n).group(1) not in tubes}:
+        if "[" in node:
+            stem = re.sub(r"\[\d+\]", "[", node)
+            assert any(re.sub(r"\[[^\]]*\]", "[", t) == stem for t in texts), node
+        else:
+            assert node in texts, node
+
+
+def test_arrays_are_drawn_once_with_their_count():
+    lay = draw(parse_file(ROOT / "netlists/demux3.pn").circuit)
+    texts = _texts(lay.svg)
+    for label in ("Aact[0:7] ×8", "Rleak[0:7] ×8", "Xcell[0:7].Vn1 ×8", "act[0:7]",
+                  "Xinv[0:2].Xv ×3", "a_1[0:2]", "Xcell[0,2,…,6].X0 ×4", "Xcell[1,3,…,7].X0 ×4"):
+        assert label in texts
+    # a netlist of 1000 cells is one cell ×1000
+    text = "P1 supply 300kPa\n.subckt C s\nR1 s t 1\nVt t 1mL\n.ends\nXc[0:999] supply C\n"
+    sch = collapse(parse_netlist(text).circuit)
+    assert sorted(p.label for p in sch.parts.values()) == ["P1", "Xc[0:999].R1", "Xc[0:999].Vt"]
+    assert {p.count for p in sch.parts.values()} == {1, 1000}
+
+
+def test_a_tube_is_one_symbol_with_its_segments():
+    c = Circuit("t")
+    c.pressure_source("P", "a", 200)
+    c.tube("T1", "a", "b", length="1m", diameter="4mm", segments=4)
+    c.volume("V", "b", V=10)
+    part = collapse(c).parts["T1"]
+    assert (part.ports, part.segments, part.count) == ({"a": "a", "b": "b"}, 4, 1)
+    assert "4 segments" in " ".join(_texts(c.draw().svg))
+
+
+def test_overlaps_and_crossings_are_measured():
+    """The measures the tests rely on see what they should."""
+    lay = Layout(100, 100, [], [("symbol", "A", (0, 0, 10, 10)), ("label", "B", (9, 9, 20, 20)),
+                                ("label", "C", (20, 0, 30, 9))], [])
+    assert lay.overlaps() == [("symbol A", "label B")]
+    lay.wires = [("n1", [(0, 5), (10, 5)], False), ("n2", [(5, 0), (5, 10)], True),
+                 ("n1", [(7, 0), (7, 10)], False)]
+    assert lay.crossings() == 1          # the same net joining itself is no crossing
+
+
+def test_flow_runs_left_to_right_and_control_lines_are_dashed():
+    lay = draw(parse_file(ROOT / "netlists/oscillator.pn").circuit)
+    x = {name: box[0] for what, name, box in lay.boxes if what == "symbol"}
+    assert x["PH"] < x["X1"] < x["Rout"] < x["Rvent"]
+    dashed = [w for w in lay.wires if w[2]]
+    assert [w[0] for w in dashed] == ["tank"]          # X1's pilot line, to the tank
+    assert all(not w[2] for w in lay.wires if w[0] != "tank")
+    assert 'class="ctrl"' in lay.svg and "stroke-dasharray" in lay.svg
+
+
+def _number(texts, prefix):
+    return [float(t[len(prefix):].split()[0]) for t in texts if t.startswith(prefix)]
+
+
+def test_operating_point_numbers_are_on_the_drawing(tmp_path, capsys):
+    path = ROOT / "netlists/oscillator_rout0.pn"
+    op = parse_file(path).circuit.op(stability=False)
+    out = tmp_path / "op.svg"
+    assert main(["draw", str(path), "-o", str(out), "--op"]) == 0
+    assert "0 overlaps" in capsys.readouterr().out
+    texts = _texts(out.read_text())
+    assert sorted(_number(texts, "p=")) == pytest.approx(sorted(op.pressures.values()), rel=1e-3)
+    assert sorted(_number(texts, "ṁ=")) == pytest.approx(sorted(op.flows.values()), rel=1e-3)
+
+
+def test_transient_numbers_at_a_time_are_on_the_drawing(tmp_path):
+    deck = parse_file(ROOT / "netlists/oscillator.pn")
+    sol = deck.circuit.tran(3.0, t_step=0.01)
+    expect = sol.at(3.0)
+    texts = _texts(deck.circuit.draw(results=(sol, 3.0)).svg)
+    assert sorted(_number(texts, "p=")) == pytest.approx(
+        sorted(v for k, v in expect.items() if k.startswith("p_")), rel=1e-3)
+    out = tmp_path / "at.svg"
+    assert main(["draw", str(ROOT / "netlists/oscillator.pn"), "-o", str(out), "--at", "3s"]) == 0
+    assert _number(_texts(out.read_text()), "p=") == pytest.approx(_number(texts, "p="), rel=2e-3)
+
+
+@pytest.mark.parametrize("args, message", [
+    (["-o", "x.txt"], "unknown drawing format"),
+    (["-o", "x.svg", "--at", "31s"], "outside the .tran interval"),
+    (["-o", "x.svg", "--at", "soon"], "not a time"),
+])
+def test_bad_requests_are_exit_2_with_a_message(args, message, tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    assert main(["draw", str(ROOT / "netlists/oscillator.pn"), *args]) == 2
+    err = capsys.readouterr().err
+    assert message in err and "Traceback" not in err
+    assert not list(tmp_path.iterdir())
+
+
+def test_at_needs_a_transient(tmp_path, capsys):
+    net = tmp_path / "op.pn"
+    net.write_text("P1 a 200kPa\nR1 a atm 1\n.op\n")
+    assert main(["draw", str(net), "-o", str(tmp_path / "x.svg"), "--at", "1s"]) == 2
+    assert "has no .tran" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("suffix, magic", [(".png", b"\x89PNG"), (".pdf", b"%PDF")])
+def test_png_and_pdf(suffix, magic, tmp_path):
+    out = tmp_path / f"c{suffix}"
+    assert main(["draw", str(ROOT / "netlists/inverter.pn"), "-o", str(out)]) == 0
+    assert out.read_bytes().startswith(magic)
+
+
+def test_jupyter_shows_the_schematic():
+    c = Circuit("rc")
+    c.pressure_source("PS", "s", 300)
+    c.resistor("R1", "s", "t", R=1)
+    c.volume("V1", "t", V=5)
+    svg = c._repr_svg_()
+    assert svg.startswith("<svg") and {"PS", "R1", "V1", "s", "t"} <= set(_texts(svg))
+
+
+def test_a_browser_renders_the_drawing(tmp_path):
+    """Headless Chromium draws the SVG: the picture holds dark pixels where the layout put
+    the supply's symbol and none outside the drawing's size."""
+    browser = shutil.which("chromium") or shutil.which("chromium-browser")
+    if browser is None:
+        pytest.skip("no chromium on this machine (apt-get install chromium): not rendered")
+    lay = draw(parse_file(ROOT / "netlists/oscillator.pn").circuit, tmp_path / "osc.svg")
+    png = tmp_path / "osc.png"
+    w, h = int(lay.width) + 40, int(lay.height) + 40
+    subprocess.run([browser, "--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars",
+                    f"--screenshot={png}", f"--window-size={w},{h}",
+                    (tmp_path / "osc.svg").as_uri()], capture_output=True, timeout=60)
+    from matplotlib.image import imread
+
+    img = imread(png)[..., :3].mean(axis=2)
+    x0, y0, x1, y1 = next(b for what, name, b in lay.boxes if what == "symbol" and name == "PH")
+    assert img[int(y0):int(y1) + 1, int(x0):int(x1) + 1].min() < 0.3     # the source is drawn
+    assert img[int(lay.height) + 5:, :].min() > 0.9                       # nothing below it
