@@ -252,6 +252,17 @@ class Circuit:
         lines.append("  nodes: " + " ".join(self.nodes))
         return "\n".join(lines)
 
+    def draw(self, path=None, *, results=None):
+        """The schematic (:func:`pneunet.schematic.draw`), written to ``path`` (.svg, .png,
+        .pdf) if given; ``results``: an operating point or ``(solution, t)`` to annotate."""
+        from ..schematic import draw
+
+        return draw(self, path, results=results)
+
+    def _repr_svg_(self) -> str:
+        """Jupyter shows a circuit as its schematic."""
+        return self.draw().svg
+
     # -- analyses -------------------------------------------------------------------
     def tran(self, t_stop: float, **kwargs):
         """Transient analysis; see :func:`pneunet.engine.simulate.transient`.  Times are
