@@ -135,8 +135,22 @@ def mckibben():
                     title="Fig. 12: oscillator driving a 53 cm McKibben lifting 200 g")
 
 
+SCHEMATICS = ("fill_time", "amplifier", "oscillator", "inverter", "demux3", "demux6")
+
+
+def schematics():
+    """``pneunet draw``: the paper's circuits; the oscillator also at 12.5 s of its run."""
+    from pneunet.cli import main
+
+    for name in SCHEMATICS:
+        main(["draw", str(ROOT / "netlists" / f"{name}.pn"),
+              "-o", str(OUT / "schematic" / f"{name}.svg")])
+    main(["draw", str(ROOT / "netlists" / "oscillator.pn"), "--at", "12.5s",
+          "-o", str(OUT / "schematic" / "oscillator_at12.5s.svg")])
+
+
 FIGURES = {f.__name__: f for f in (solution, sweep, branches, design, identify, diagnose,
-                                   traces, tornado, soft_robot, mckibben)}
+                                   traces, tornado, soft_robot, mckibben, schematics)}
 
 if __name__ == "__main__":
     OUT.mkdir(parents=True, exist_ok=True)

@@ -16,7 +16,7 @@ import networkx as nx
 
 from .collapse import Schematic
 from .labels import name_line, value_line
-from .geometry import CHAR_W, GAP_Y, LINE_H
+from .geometry import CHAR_W, GAP_Y, LINE_H, MARGIN
 from .routing import route
 from .symbols import EXHAUST_W, symbol
 
@@ -176,7 +176,7 @@ def layout(sch: Schematic, node_notes=None, part_notes=None) -> "Layout":
 
     items_y, size, anchor, neighbours, columns = {}, {}, {}, {}, []
     chains = []
-    y_offset = 0.0
+    y_offset = float(MARGIN)
     for comp in graph.C:
         sug = SugiyamaLayout(comp)
         roots = [v for v in comp.sV if dag.in_degree(v.data) == 0]
