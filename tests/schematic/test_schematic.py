@@ -120,6 +120,9 @@ def test_arrays_are_drawn_once_with_their_count():
     sch = collapse(parse_netlist(text).circuit)
     assert sorted(p.label for p in sch.parts.values()) == ["P1", "Xc[0:999].R1", "Xc[0:999].Vt"]
     assert {p.count for p in sch.parts.values()} == {1, 1000}
+    # two of a kind are two as well; one element is never "×1"
+    texts = _texts(draw(parse_netlist("P1 s 300kPa\nR[0:1] s atm 1\n").circuit).svg)
+    assert "R[0:1] ×2" in texts and "P1" in texts
 
 
 def test_a_tube_is_one_symbol_with_its_segments():
