@@ -6,7 +6,17 @@ name, or simulation time) and, where it helps, *what to try*.  The CLI turns a
 """
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
+
+#: control characters a terminal would act on (ESC, NUL, CR, ...), not tab and line feed
+_CONTROL = re.compile(r"[\x00-\x08\x0b-\x1f\x7f-\x9f]")
+
+
+def printable(text: str) -> str:
+    """``text`` with each control character written as Python writes it (``\\x1b``,
+    ``\\r``), so that a name or file name never acts on the user's terminal."""
+    return _CONTROL.sub(lambda m: repr(m.group())[1:-1], text)
 
 
 @dataclass(frozen=True)
@@ -27,7 +37,9 @@ class SourceSpan:
         with a caret under the column, or '' without text."""
         if not self.text:
             return ""
-        text, column = self.text.rstrip(), self.column
+        text = self.text.rstrip()
+        column = len(printable(text[:self.column - 1])) + 1
+        text = printable(text)
         if len(text) > width:
             start = max(0, min(column - 1 - width // 2, len(text) - width))
             text = ("…" if start else "") + text[start:start + width] + \
@@ -73,7 +85,7 @@ def _report(kind, where, message, span, hint) -> str:
         lines.append(f"  included from {via}")
     if hint:
         lines.append(f"hint: {hint}")
-    return "\n".join(lines)
+    return printable("\n".join(lines))
 
 
 class InputWarning(UserWarning):

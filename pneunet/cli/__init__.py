@@ -43,11 +43,12 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from ..errors import PneunetError
+    from ..errors import PneunetError, printable
 
     parser = build_parser()
     try:
-        args = parser.parse_args(argv)
+        with _printable_stderr():  # argparse quotes the user's text in its errors
+            args = parser.parse_args(argv)
     except SystemExit as done:  # --help, --version, or a bad option (argparse said why)
         return done.code if isinstance(done.code, int) else 2
     if not getattr(args, "func", None):
@@ -68,7 +69,7 @@ def main(argv: list[str] | None = None) -> int:
     except BrokenPipeError:
         return _closed_pipe()
     except OSError as err:  # writing a result: a full disk, /dev/full, a vanished folder
-        print(f"error: {_written(err)}: {err.strerror or err}", file=sys.stderr)
+        print(printable(f"error: {_written(err)}: {err.strerror or err}"), file=sys.stderr)
         return 2
     except MemoryError:
         print("error: out of memory (a size beyond what this machine holds); "
@@ -92,7 +93,8 @@ def _written(err: OSError) -> str:
 
 
 class _NamedStdout:
-    """sys.stdout whose write errors name it (``OSError.filename`` "standard output")."""
+    """sys.stdout whose write errors name it (``OSError.filename`` "standard output") and
+    whose control characters are escaped (a name never acts on the terminal)."""
 
     def __init__(self, stream):
         self._stream = stream
@@ -101,7 +103,9 @@ class _NamedStdout:
         return getattr(self._stream, name)
 
     def write(self, text):
-        return self._call(self._stream.write, text)
+        from ..errors import printable
+
+        return self._call(self._stream.write, printable(text) if isinstance(text, str) else text)
 
     def flush(self):
         return self._call(self._stream.flush)
@@ -114,6 +118,31 @@ class _NamedStdout:
         except OSError as err:
             _drop_stdout()
             raise OSError(err.errno, err.strerror, "standard output") from None
+
+
+class _PrintableStderr:
+    """sys.stderr with control characters escaped (for argparse's messages)."""
+
+    def __init__(self, stream):
+        self._stream = stream
+
+    def __getattr__(self, name):
+        return getattr(self._stream, name)
+
+    def write(self, text):
+        from ..errors import printable
+
+        return self._stream.write(printable(text))
+
+
+@contextlib.contextmanager
+def _printable_stderr():
+    stream = sys.stderr
+    sys.stderr = _PrintableStderr(stream)
+    try:
+        yield
+    finally:
+        sys.stderr = stream
 
 
 @contextlib.contextmanager
@@ -147,7 +176,7 @@ def _drop_stdout() -> None:
 def _show_solver_warnings(quiet: bool) -> None:
     """The integrator's warnings as ``warning: …`` lines on stderr; none with -q."""
     from ..engine.diagnostics import SolverWarning
-    from ..errors import InputWarning
+    from ..errors import InputWarning, printable
 
     if quiet:
         warnings.simplefilter("ignore", SolverWarning)
@@ -159,7 +188,7 @@ def _show_solver_warnings(quiet: bool) -> None:
         if isinstance(message, InputWarning):
             print(message.report(), file=sys.stderr)
         elif issubclass(category, SolverWarning):
-            print(f"warning: {message}", file=sys.stderr)
+            print(printable(f"warning: {message}"), file=sys.stderr)
         else:
             default(message, category, filename, lineno, file, line)
     warnings.showwarning = show

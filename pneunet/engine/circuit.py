@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import difflib
 import os
+import re
 from typing import Any
 
 from .. import elements
@@ -28,6 +29,37 @@ from ..units import split_quantity, to_internal
 from ..waveforms import Waveform, as_waveform
 
 REFERENCE_NODES = ("0", "gnd", "atm")
+#: what a netlist word cannot hold (white space, control characters, its punctuation):
+#: a name with one would not parse back from :func:`~pneunet.netlist.print_circuit`
+_NOT_IN_NAME = re.compile(r'[\s=(){},;"\x00-\x1f\x7f-\x9f]')
+
+
+def _check_name(name: str, what: str, where: str) -> None:
+    """A ParameterError unless ``name`` is one netlist word (as ``print_circuit`` writes it)."""
+    bad = _NOT_IN_NAME.search(name) if name else None
+    if not name or bad or name[0] in "*+.;":
+        char = bad.group() if bad else name[:1]
+        raise ParameterError(
+            f"{what} {name!r} cannot be written in a netlist"
+            + (f" (it holds {char!r})" if name else " (it is empty)"), where=where,
+            hint="use letters, digits and _ . : [ ] # - (no spaces, control characters, "
+                 "quotes, '=', ',', ';', parentheses or braces; not starting with * + . ;)")
+
+
+def _check_distinct(family, nodes, where: str) -> None:
+    """A TopologyError when two of the ports that pass flow share a node (``R1 x x 1``:
+    a flow from a node into itself)."""
+    flow = family.passing_flow(len(nodes))
+    same = ["atm" if n in REFERENCE_NODES else n for n in nodes]  # 0, gnd, atm: one node
+    for i, a in enumerate(flow):
+        for b in flow[i + 1:]:
+            if same[a] == same[b]:
+                node = repr(nodes[a]) if nodes[a] == nodes[b] else \
+                    f"{nodes[a]!r} = {nodes[b]!r} (the ambient)"
+                raise TopologyError(
+                    f"{family.kind} has its ports {family.ports[a]} and {family.ports[b]} on "
+                    f"the same node {node}: a flow from a node into itself",
+                    where=where, hint="connect them to different nodes, or remove the element")
 
 
 class Circuit:
@@ -49,9 +81,11 @@ class Circuit:
             **params) -> ElementSpec:
         """Add an element of a registered kind; parameters are checked and converted."""
         family = elements.family(kind)
-        where = f"{span}: element {name}" if span else f"element {name}"
+        shown = repr(name) if _NOT_IN_NAME.search(name) else name
+        where = f"{span}: element {shown}" if span else f"element {shown}"
         if not name:
             raise ParameterError("an element needs a name", where=str(span) if span else None)
+        _check_name(name, "element name", where)
         if name in self.elements:
             first = self.elements[name].span
             raise TopologyError(f"duplicate element name {name!r}", where=where,
@@ -69,6 +103,9 @@ class Circuit:
             raise TopologyError(
                 f"{family.kind} needs {len(family.ports)} node(s) ({' '.join(family.ports)}), "
                 f"got {len(nodes)}", where=where)
+        for node in nodes:
+            _check_name(node, "node name", where)
+        _check_distinct(family, nodes, where)
         values = self._convert_params(family, params, where)
         spec = ElementSpec(family.kind, name, nodes, values, span)
         family.check_spec(spec)

@@ -112,6 +112,8 @@ def lark_parser():
 
 
 _COMMENT_LINE = re.compile(r"^[ \t]*\*")
+#: control characters refused outside comments (NUL, ESC, ...; not tab, CR, LF, form feed)
+_CONTROL = re.compile(r"[\x00-\x08\x0b\x0e-\x1f\x7f-\x9f]")
 
 
 def blank_comments(text: str) -> tuple[str, str]:
@@ -150,6 +152,14 @@ def parse_text(text: str, name: str = "<netlist>", path: Path | None = None, *,
                                hint="split it with '+' continuation lines; "
                                     + limits.hint("max_line_length"))
     clean, title = blank_comments(text)
+    control = _CONTROL.search(clean)
+    if control:
+        line = clean.count("\n", 0, control.start()) + 1
+        column = control.start() - clean.rfind("\n", 0, control.start())
+        raise NetlistError(f"control character {control.group()!r} in the netlist",
+                           span=_span(name, lines, line, column),
+                           hint="names, nodes and values are printable text: remove it (a "
+                                "binary file, or a paste from a terminal?)")
     first = clean.lstrip(" \n\r")
     if first.startswith("+"):
         line = clean[:len(clean) - len(first)].count("\n") + 1

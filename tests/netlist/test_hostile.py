@@ -158,3 +158,77 @@ def test_a_nest_of_subcircuit_arrays_is_counted_before_it_is_made(tmp_path):
     assert info.value.span.line == text.count("\n")
     assert "this line makes 1000000 elements, 1000001 with the lines before (limit " \
            "max_elements = 100000)" in info.value.message
+
+
+@pytest.mark.parametrize("char", ["\x00", "\x1b", "\x07", "\x7f", "\x9b", "\x0b"],
+                         ids=["NUL", "ESC", "BEL", "DEL", "CSI", "VT"])
+def test_a_control_character_in_a_name_is_refused_at_its_column_and_never_echoed(
+        char, tmp_path, capsys):
+    """NUL, ESC and their kin are refused where they stand (issue 33, class 7); the message
+    and its caret line show them escaped ('\\x1b'), never raw to the terminal."""
+    text = BASE + f"R2 a b{char}[31m 1\nV2 b{char}[31m 1mL\n"
+    with pytest.raises(NetlistError) as info:
+        parse_netlist(text)
+    assert (info.value.span.line, info.value.span.column) == (4, 7)
+    assert info.value.message == f"control character {char!r} in the netlist"
+    path = tmp_path / "ctl.pn"
+    path.write_text(text)
+    assert main(["check", "-v", str(path)]) == 2
+    out, err = capsys.readouterr()
+    assert f"{path}:4:7: error: control character" in err and char not in out + err
+    assert f"R2 a b{char!r}"[:-1].replace("'", "") in err  # the caret line, escaped
+    parse_netlist(BASE + f"*{char} a comment may hold it\n")  # outside names: allowed
+
+
+def test_a_control_character_in_a_file_name_is_escaped_on_stdout(tmp_path, capsys):
+    path = tmp_path / "o\x1b[31mx.pn"
+    path.write_text(BASE)
+    assert main(["check", "-v", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "\x1b" not in out and "o\\x1b[31mx.pn: ok" in out
+
+
+@pytest.mark.parametrize("line, message", [
+    ("R2 x x 1", "resistor has its ports a and b on the same node 'x'"),
+    ("R2 0 atm 1", "on the same node '0' = 'atm' (the ambient)"),
+    ("pipe T2 a a length=100mm diameter=2mm", "pipe has its ports a and b on the same node"),
+    ("X2 a a b model=axi", "valve has its ports in and out on the same node 'a'"),
+    ("D2 a a", "check_valve has its ports a and b"),
+    ("F2 a a 1", "flow_source has its ports a and b"),
+], ids=["resistor", "ambient", "tube", "valve", "check_valve", "flow_source"])
+def test_an_element_from_a_node_into_itself_is_a_located_error(line, message):
+    with pytest.raises(NetlistError) as info:
+        parse_netlist(BASE + line + "\n").validate()
+    column = 6 if line.startswith("pipe") else 1  # the keyword form: at its name
+    assert (info.value.span.line, info.value.span.column) == (4, column)
+    assert message in info.value.message and "a flow from a node into itself" in \
+        info.value.message
+
+
+def test_a_valve_may_pilot_itself_from_its_own_inlet():
+    """Only the ports that pass flow must differ: a valve's control on its inlet is fine."""
+    deck = parse_netlist(BASE + "X2 a b a model=axi\nV2 b 1mL\nR3 b atm 1\n")
+    assert deck.circuit.elements["X2"].nodes == ("a", "b", "a")
+
+
+@pytest.mark.parametrize("name", ["R\n1", "R 1", "R\x1b1", "R(1)", "R=1", "*R1", ".R1", "R;1",
+                                  'R"1', "R{1}", "R,1"])
+def test_a_python_name_that_would_not_parse_back_is_refused(name):
+    """Circuit.resistor("R\\n1", ...) made print_circuit write a netlist that did not parse
+    back: every name and node is one netlist word, else a ParameterError naming it."""
+    from pneunet import Circuit
+    from pneunet.errors import ParameterError
+    from pneunet.netlist import print_circuit
+
+    c = Circuit()
+    with pytest.raises(ParameterError, match="cannot be written in a netlist") as info:
+        c.resistor(name, "a", "atm", R=1)
+    assert repr(name) in info.value.message
+    with pytest.raises(ParameterError, match="node name"):
+        c.resistor("R1", name, "atm", R=1)
+    c.pressure_source("P1", "a", 200)
+    c.resistor("R1.x:[2]#-_", "a", "b", R=1)
+    c.volume("V1", "b", V="1mL")
+    c.resistor("R2", "b", "atm", R=1)
+    back = parse_netlist(print_circuit(c)).circuit
+    assert list(back.elements) == list(c.elements)

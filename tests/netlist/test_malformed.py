@@ -5,7 +5,7 @@ from pathlib import Path
 import pytest
 
 from pneunet.cli import main
-from pneunet.errors import NetlistError
+from pneunet.errors import NetlistError, printable
 from pneunet.netlist import parse_file
 
 CORPUS = sorted((Path(__file__).parent / "malformed").glob("*.pn"))
@@ -40,7 +40,7 @@ def test_error_line_column(path, opened_files):
     pos = caret.index("^")
     assert len(shown) <= 4 + 122 and len(caret) == pos + 1
     if column <= len(source.rstrip()):
-        assert shown[pos] == source[column - 1].replace("\t", " ")
+        assert shown[pos] == printable(source[column - 1].replace("\t", " "))[0]
     else:
         assert pos == len(shown)
 

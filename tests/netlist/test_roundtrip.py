@@ -30,7 +30,8 @@ def netlists(draw):
         lines.append(f"V{i} {node} {fmt(draw(POS), 'volume', draw(st.integers(0, 2)))}"
                      + (f" n={draw(st.floats(1, 1.4))!r}" if draw(st.booleans()) else ""))
     for i in range(draw(st.integers(1, 6))):
-        a, b = draw(st.sampled_from(nodes)), draw(st.sampled_from(nodes + ["atm", "0"]))
+        a = draw(st.sampled_from(nodes))
+        b = draw(st.sampled_from([n for n in nodes + ["atm", "0"] if n != a]))  # R1 x x: error
         kind = draw(st.sampled_from(["R", "X", "pipe", "A", "F"]))
         if kind == "R":
             lines.append(f"R{i} {a} {b} {fmt(draw(POS), 'resistance', draw(st.integers(0, 2)))}")
