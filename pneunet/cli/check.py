@@ -13,6 +13,8 @@ def register(subparsers) -> None:
     p.add_argument("netlist", metavar="FILE.pn", help="netlist file")
     p.add_argument("--verbose", "-v", action="store_true",
                    help=f"list every node and element (by default at most {LISTED} of each)")
+    p.add_argument("--draw", metavar="OUT",
+                   help="also draw the schematic (.svg, .png or .pdf; as pneunet draw)")
     netlist_args.add(p)
     p.set_defaults(func=main)
 
@@ -27,6 +29,12 @@ def main(args) -> int:
     deck = parse_file(args.netlist, **netlist_args.parse_options(args))
     deck.validate()
     netlist_args.check_nodes(deck.circuit, args.strict)
+    if args.draw:
+        from .draw import check_format
+        from ..schematic import draw
+
+        check_format(args.draw)
+        draw(deck.circuit, args.draw)
     print(f"{args.netlist}: ok")
     print(summary(deck.circuit, args.verbose))
     analyses = ", ".join(f".{a.kind}" for a in deck.analyses) or "none"

@@ -27,14 +27,20 @@ def register(subparsers) -> None:
     p.set_defaults(func=main)
 
 
-def main(args) -> int:
+def check_format(path: str) -> None:
+    """Exit 2 unless ``path`` ends in a drawing format."""
     from ..errors import ParameterError
+
+    if not path.lower().endswith(FORMATS):
+        raise ParameterError(f"{path}: unknown drawing format",
+                             hint="end the name in " + ", ".join(FORMATS))
+
+
+def main(args) -> int:
     from ..netlist import parse_file
     from ..schematic import draw
 
-    if not args.output.lower().endswith(FORMATS):
-        raise ParameterError(f"-o {args.output}: unknown drawing format",
-                             hint="end the name in " + ", ".join(FORMATS))
+    check_format(args.output)
     deck = parse_file(args.netlist, **netlist_args.parse_options(args))
     deck.validate()
     netlist_args.check_nodes(deck.circuit, args.strict)

@@ -195,6 +195,14 @@ def test_bad_requests_are_exit_2_with_a_message(args, message, tmp_path, monkeyp
     assert not list(tmp_path.iterdir())
 
 
+def test_check_draws_before_anything_is_simulated(tmp_path, capsys):
+    out = tmp_path / "demux3.svg"
+    assert main(["check", str(ROOT / "netlists/demux3.pn"), "--draw", str(out)]) == 0
+    assert "Aact[0:7] ×8" in _texts(out.read_text())
+    assert main(["check", str(ROOT / "netlists/demux3.pn"), "--draw", "x.gif"]) == 2
+    assert "unknown drawing format" in capsys.readouterr().err
+
+
 def test_at_needs_a_transient(tmp_path, capsys):
     net = tmp_path / "op.pn"
     net.write_text("P1 a 200kPa\nR1 a atm 1\n.op\n")
