@@ -211,6 +211,9 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
     aligned = None
     if align and not state.driven and node and f"p_{node}" in meas:
         aligned = Alignment.of(times, meas[f"p_{node}"], f"p_{node}")
+    settle_until = settling_time(state, times, meas.get(f"p_{node}"))
+    if settle_until > 0:  # states the record cannot give settle before they are compared
+        keep_all = {s: k & (times >= settle_until) for s, k in keep_all.items()}
     fun = TraceResidual(model, names, t_fit, sigs, {s: meas[s][mask] for s in sigs},
                         {s: keep_all[s][mask] for s in sigs}, scales, aligned)
     stage1 = None
@@ -256,7 +259,21 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
                     {"stage1": stage1, "simulations": nfev, "intervals": info,
                      "alignment": aligned, "jacobian": res.jac, "start_state": state,
                      "model": model, "recording": where,
-                     "compared": {s: int(keep_all[s].sum()) for s in sigs}})
+                     "compared": {s: int(keep_all[s].sum()) for s in sigs},
+                     "compared_from_s": settle_until})
+
+
+def settling_time(state, times, y) -> float:
+    """Time of the record (s) from which a fit started from the record's state compares
+    it: the first rising mid-level crossing of the cycle node ``y`` (an oscillating
+    record), when the first cycle's unrecorded states — an effect's gas temperature or
+    tube pressure, started at wall temperature or at their neighbours' pressure — have
+    settled; 0 for another start, or a record that does not oscillate."""
+    from .data import oscillates, rising_crossings
+
+    if state.mode != "record" or y is None or not oscillates(times, y):
+        return 0.0
+    return float(rising_crossings(times, y)[0])
 
 
 def check_signals(model: TraceModel, values: dict, columns, where: str) -> None:
