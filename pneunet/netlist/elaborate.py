@@ -115,7 +115,7 @@ class _Builder(ModelCards, AnalysisStatements, MeasureStatements, WaveformCalls)
             elif kw == ".step":
                 deck.steps.append(self._step(st))
             elif kw in (".meas", ".measure"):
-                m = self._meas(st)
+                m = self._meas(st, deck.measures)
                 if any(x.name.lower() == m.name.lower() for x in deck.measures):
                     raise _err(f"duplicate measurement name {m.name!r}", st.items[2]
                                if len(st.items) > 2 else st.span)

@@ -99,6 +99,39 @@ def evaluate(text: str, scope: Scope, span: SourceSpan, column: int | None = Non
     return value
 
 
+def check_names(text: str, known, span: SourceSpan, column: int, hint: str) -> None:
+    """A located NetlistError (did you mean …?) for the first name in expression ``text``
+    that is neither in ``known`` nor a constant, or an unknown function, before anything
+    is evaluated; a syntax error is reported as :func:`evaluate` does."""
+    from lark import Token
+    from lark.exceptions import UnexpectedInput
+
+    try:
+        tree = _parse(text)
+    except UnexpectedInput:
+        evaluate(text, Scope(), span, column)  # raises the located syntax error
+        raise  # pragma: no cover
+    if isinstance(tree, Token):
+        tokens = [tree]
+    else:
+        calls = list(tree.find_data("func"))
+        for call in calls:
+            if str(call.children[0]).lower() not in FUNCTIONS:
+                _Evaluator(Scope(), span, column, None).r_func(call)  # raises: unknown
+        functions = {id(f.children[0]) for f in calls}
+        tokens = [t for t in tree.scan_values(lambda v: isinstance(v, Token))
+                  if id(t) not in functions]
+    for tok in tokens:
+        if tok.type == "NAME" and tok not in known and tok.lower() not in CONSTANTS:
+            try:
+                _Evaluator(Scope(dict.fromkeys(known, 0.0)), span, column, None).name(
+                    str(tok), _shift(span, tok.column, column))
+            except NetlistError as err:
+                raise NetlistError(err.message, span=err.span,
+                                   hint=f"{err.hint}; {hint}" if "did you" in err.hint
+                                   else hint) from None
+
+
 @functools.lru_cache(maxsize=4096)
 def _parse(text: str):
     """The parse tree of expression ``text`` (an array repeats its expressions per copy; the

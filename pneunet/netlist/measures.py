@@ -4,6 +4,7 @@ from __future__ import annotations
 import re
 
 from .deck import Measure
+from .expr import check_names
 from .located import did_you_mean as _close, error_at as _err
 from .syntax import Pair, Word
 
@@ -16,7 +17,9 @@ SIGNAL_SLOTS = {"p": "pressure", "mdot": "flow", "contraction": "length", "force
 class MeasureStatements:
     """Mixin of the elaboration builder: ``.meas`` statements and their options."""
 
-    def _meas(self, st) -> Measure:
+    def _meas(self, st, earlier=()) -> Measure:
+        """The ``.meas`` statement ``st``; ``earlier``: the measurements above it (the
+        names a PARAM expression may use)."""
         items = list(st.items[1:])
         analysis = "tran"
         if items and isinstance(items[0], Word) and items[0].text.lower() in ("tran", "op", "dc"):
@@ -45,7 +48,11 @@ class MeasureStatements:
         if kind == "param":
             if len(rest) != 1 or not isinstance(rest[0], Word):
                 raise _err("PARAM needs one {expression} of other measurements", kind_item)
-            m.args["expr"] = rest[0]
+            m.args["expr"] = word = rest[0]
+            text = word.text[1:-1] if word.text.startswith("{") else word.text
+            check_names(text, [x.name for x in earlier], word.span, word.span.column + 1,
+                        "PARAM uses the measurements above it: "
+                        + (", ".join(x.name for x in earlier) or "none here"))
             return m
         if kind == "when":
             if not rest or not isinstance(rest[0], Pair):

@@ -232,3 +232,35 @@ def test_a_python_name_that_would_not_parse_back_is_refused(name):
     c.resistor("R2", "b", "atm", R=1)
     back = parse_netlist(print_circuit(c)).circuit
     assert list(back.elements) == list(c.elements)
+
+
+MEAS = BASE + ".tran 1\n.meas tran pmax MAX p(a)\n"
+
+
+@pytest.mark.parametrize("expr, column, message, hint", [
+    ("{pmaxx*2}", 25, "undefined parameter 'pmaxx'", "did you mean 'pmax'?"),
+    ("{pmax + later}", 32, "undefined parameter 'later'", "the measurements above it: pmax"),
+    ("{sqr(pmax)}", 25, "unknown function 'sqr'", "did you mean 'sqrt'?"),
+    ("{pmax +* 2}", 31, "syntax error in expression", None),
+])
+def test_a_misspelt_name_in_a_meas_param_is_a_located_error_not_failed(
+        expr, column, message, hint, tmp_path, capsys):
+    """It printed 'FAILED' and exit 0 after the whole run (issue 33, class 7)."""
+    text = MEAS + f".meas tran twice PARAM {expr}\n.meas tran later MIN p(a)\n"
+    with pytest.raises(NetlistError) as info:
+        parse_netlist(text)
+    assert (info.value.span.line, info.value.span.column) == (6, column)
+    assert message in info.value.message and (hint is None or hint in info.value.hint)
+    path = tmp_path / "m.pn"
+    path.write_text(text)
+    assert main(["run", str(path), "-o", str(tmp_path / "out")]) == 2
+    assert f"{path}:6:{column}: error:" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_meas_param_of_the_measurements_above_it_runs():
+    from pneunet.netlist.runner import run_deck
+
+    deck = parse_netlist(MEAS + ".meas tran twice PARAM {sqrt(pmax)**2 * 2 + 0*pi}\n")
+    result = run_deck(deck)
+    assert result.measures["twice"] == pytest.approx(2 * result.measures["pmax"], rel=1e-12)
