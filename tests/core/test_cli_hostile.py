@@ -162,3 +162,22 @@ def test_a_write_that_fails_later_is_one_message_and_a_closed_pipe_is_quiet(shel
         assert done.returncode == 2 and done.stderr.strip() == message, done.stderr
     else:
         assert done.returncode == 0 and done.stderr == ""
+
+
+def test_clean_errors_exit_2_not_1(tmp_path, capsys):
+    """Errors the attacker saw exit 1 (issue 33, class 7): too few sweeps, an empty design
+    range, a closure pressure outside (p_L, p_H); and an output named with an ESC byte is
+    quoted escaped, never raw."""
+    few = tmp_path / "few.csv"
+    few.write_text("".join(Path(BENCH).read_text().splitlines(keepends=True)[:63]))
+    folder = tmp_path / "o\x1b[31m"
+    folder.mkdir()
+    cases = [(["diagnose", str(few)], "only 3 sweep(s) found; the diagnosis needs at least 5"),
+             (DESIGN[:2] + ["--vary", "Rout=3:0.6", "--target", "period=3s"],
+              "range of Rout: empty, low 3 ≥ high 0.6"),
+             (["branches", "--pL", "300", "--pH", "200"], "lies outside (p_L, p_H)"),
+             (["fit", BENCH, "--model-out", str(folder)], "o\\x1b[31m is a folder")]
+    for argv, message in cases:
+        assert main(argv) == 2, argv
+        err = capsys.readouterr().err
+        assert message in err and "\x1b" not in err and err.count("error:") == 1, err
