@@ -8,6 +8,7 @@ tested on stand-alone recordings in tests/traces/).
 
     python benchmarks/bench_trace.py                 # 40 s, V = 200 mL
     python benchmarks/bench_trace.py --t-end 12 --V 50
+    python benchmarks/bench_trace.py --start 8       # the logger started 8 s after switch-on
     options: --workers N (processes for finite differences and candidates, default 2)
 """
 from __future__ import annotations
@@ -22,6 +23,8 @@ def main(argv=None) -> None:
     ap.add_argument("--V", type=float, default=200.0)
     ap.add_argument("--n", type=float, default=1.3, help="hidden polytropic exponent")
     ap.add_argument("--workers", type=int, default=None)
+    ap.add_argument("--start", type=float, default=0.0,
+                    help="s after switch-on at which the recording starts (its clock from 0)")
     args = ap.parse_args(argv)
 
     from pneunet.analysis.circuits import oscillator
@@ -29,8 +32,10 @@ def main(argv=None) -> None:
     from pneunet.traces.model import process_pool
 
     true = {"Rout": 1.132, "Rvent": 3.0, "V": args.V, "n": args.n}
-    rec = synthetic_trace(oscillator, true, args.t_end, dt=0.05, noise=0.4, seed=0,
-                          signals=("p_tank", "p_out"))
+    rec = synthetic_trace(oscillator, true, args.start + args.t_end, dt=0.05, noise=0.4,
+                          seed=0, signals=("p_tank", "p_out"))
+    rec = rec[rec["time_s"] >= args.start - 1e-9].reset_index(drop=True)
+    rec["time_s"] -= rec["time_s"].iloc[0]
     params = {"Rout": (1.4, 0.3, 5.0), "Rvent": (3.8, 0.5, 20.0),
               "V": (1.3 * args.V, 5.0, 5000.0)}
     train, _ = split_by_cycles(rec, "tank")
@@ -47,8 +52,9 @@ def main(argv=None) -> None:
     diag = diagnose_trace(oscillator, rec, params, node="tank", workers=args.workers)
     whole_s = time.perf_counter() - t0
 
-    print(f"recording: {args.t_end:g} s at 20 Hz, p_tank and p_out, V = {args.V:g} mL, "
-          f"hidden n = {args.n:g}")
+    print(f"recording: {args.t_end:g} s at 20 Hz from {args.start:g} s after switch-on, "
+          f"p_tank and p_out, V = {args.V:g} mL, hidden n = {args.n:g}; start state "
+          f"{diag.final.start_state.mode}")
     print(f"{'':34}{'wall s':>8}{'simulations':>13}")
     print(f"{'base fit (3 parameters)':34}{base_s:8.1f}{fit.nfev:13d}")
     print(f"{'whole diagnosis':34}{whole_s:8.1f}{diag.timing['simulations']:13d}")

@@ -484,7 +484,8 @@ def _fit_data(df, window, base: TraceFit):
     sigs = base.signals()
     cols = {signal_of_column(c): c for c in df.columns if c != "time_s"}
     meas = {s: df[cols[s]].to_numpy() for s in sigs}
-    keep = {s: compared_samples(meas[s])[mask] for s in sigs}
+    after = times >= base.extras.get("compared_from_s", 0.0)  # as the base fit compared
+    keep = {s: (compared_samples(meas[s]) & after)[mask] for s in sigs}
     return (times[mask], sigs, {s: meas[s][mask] for s in sigs}, keep, base.scales,
             base.extras.get("alignment"))
 
