@@ -28,8 +28,8 @@ from .size import check_size
 from .structure import Source
 from .waveform_calls import WaveformCalls
 from .syntax import Call, Pair, Str, Word
-from .values import (SCALE, check_number, convert, dimension_of, number_in_expression,
-                     set_expression_ambient, split)
+from .values import (SCALE, check_number, convert, convert_magnitude, dimension_of,
+                     number_in_expression, set_expression_ambient, split)
 
 REFERENCE = ("0", "gnd", "atm")
 DIRECTIVES = (".param", ".subckt", ".ends", *INCLUDE_KEYWORDS, ".model", ".ic", ".options",
@@ -454,7 +454,10 @@ class _Builder(ModelCards, AnalysisStatements, MeasureStatements, WaveformCalls)
             return item.text if isinstance(item, (Word, Str)) else str(item)
         if spec.kind == "table" and isinstance(item, Call) and item.name.upper() == "TABLE":
             return inline_table(item, family.table_slots,
-                                lambda a, slot: self._number(a, slot, label, scope))
+                                lambda a, slot: self._number(a, slot, label, scope),
+                                lambda m, unit, slot, span: convert_magnitude(
+                                    m, unit, slot, span, name=label, ambient=self.options.ambient,
+                                    gas=self.options.volume_flow_fluid))
         if spec.kind == "table":
             return read_data_file(item, self.source.policy, family.table_slots, self.options,
                                   label, strict=True)

@@ -11,8 +11,10 @@ keeps its file line and column.  A statement is a list of items:
 """
 from __future__ import annotations
 
+import bisect
 import functools
 import re
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -48,6 +50,28 @@ class Call(Item):
 
     def __str__(self):
         return f"{self.name}({' '.join(str(a) for a in self.args)})"
+
+
+class RawArgs(Sequence):
+    """The plain words of a ``TABLE(…)`` body, read without lark (a 300,000-pair table
+    took 40 s there): their texts and (line, column) places; a :class:`Word` is made only
+    when an item is asked for (an error, or a TABLE where it does not belong)."""
+
+    def __init__(self, texts: list, places: list, name: str, lines: list, via: tuple):
+        self.texts, self.places = texts, places
+        self._where = (name, lines, via)
+
+    def __len__(self):
+        return len(self.texts)
+
+    def __getitem__(self, index):
+        if isinstance(index, slice):
+            return [self[i] for i in range(*index.indices(len(self)))]
+        return Word(self.span(index), self.texts[index])
+
+    def span(self, index: int) -> SourceSpan:
+        name, lines, via = self._where
+        return _span_in(name, lines, *self.places[index], via=via)
 
 
 @dataclass
@@ -167,6 +191,7 @@ def parse_text(text: str, name: str = "<netlist>", path: Path | None = None, *,
                            span=_span(name, lines, line, lines[line - 1].find("+") + 1))
     if not clean.endswith("\n"):
         clean += "\n"
+    clean, tables = _plain_tables(clean, name, lines, via)
     try:
         tree = lark_parser().parse(clean, start="netlist")
     except UnexpectedInput as err:
@@ -198,9 +223,48 @@ def parse_text(text: str, name: str = "<netlist>", path: Path | None = None, *,
         raise NetlistError(msg, span=_span(name, lines, line, column), hint=hint) from None
     src = SourceText(name, lines, title=title)
     for st in tree.children:
-        items = [_item(child, name, lines, _span) for child in st.children]
+        items = [_item(child, name, lines, _span, tables) for child in st.children]
         src.statements.append(Statement(items, items[0].span, path))
     return src
+
+
+_TABLE_OPEN = re.compile(r"(?<![^\s=(,])TABLE\(", re.IGNORECASE)
+_CONTINUED = re.compile(r"(?:\n[ \t\r]*)+\+")
+
+
+def _plain_tables(clean: str, name, lines, via) -> tuple[str, dict]:
+    """``clean`` with the body of each ``TABLE(…)`` that holds only plain words (numbers
+    with their units, on ``+`` lines) blanked out, and those bodies as :class:`RawArgs` by
+    the (line, column) of their TABLE.  A body with anything else (braces, commas, quotes,
+    '=', parentheses) is left to lark, which reports what is wrong in it."""
+    tables, out, done, counted, line = {}, [], 0, 0, 1
+    for match in _TABLE_OPEN.finditer(clean):
+        start, end = match.end(), clean.find(")", match.end())
+        line_start = clean.rfind("\n", 0, match.start()) + 1
+        before, body = clean[line_start:match.start()], clean[start:max(end, start)]
+        if end < 0 or any(c in body for c in '({"=,') or before.count('"') % 2 or \
+                before.count("{") > before.count("}") or \
+                body.count("\n") != sum(m.group().count("\n")
+                                        for m in _CONTINUED.finditer(body)):
+            continue
+        line += clean.count("\n", counted, match.start())
+        counted = match.start()
+        column = match.start() - line_start + 1
+        plain = _CONTINUED.sub(lambda m: m.group()[:-1] + " ", body)  # without the '+' marks
+        breaks = [m.start() for m in re.finditer("\n", body)]
+        texts, places = [], []
+        for word in re.finditer(r"\S+", plain):
+            k = bisect.bisect(breaks, word.start())
+            texts.append(word.group())
+            places.append((line + k, column + start - match.start() + word.start() if not k
+                           else word.start() - breaks[k - 1]))
+        tables[line, column] = RawArgs(texts, places, name, lines, via)
+        blank = list(re.sub(r"[^\n]", " ", body))
+        for m in _CONTINUED.finditer(body):
+            blank[m.end() - 1] = "+"
+        out += [clean[done:start], "".join(blank)]
+        done = end
+    return "".join(out) + clean[done:], tables
 
 
 def _span_in(name, lines, line, column, via=()) -> SourceSpan:
@@ -208,7 +272,7 @@ def _span_in(name, lines, line, column, via=()) -> SourceSpan:
     return SourceSpan(name, line, max(column, 1), text, via)
 
 
-def _item(node, name, lines, span_of) -> Item:
+def _item(node, name, lines, span_of, tables) -> Item:
     kind = node.data
     span = span_of(name, lines, node.meta.line, node.meta.column)
     if kind == "word":
@@ -216,15 +280,15 @@ def _item(node, name, lines, span_of) -> Item:
     if kind == "string":
         return Str(span, str(node.children[0])[1:-1])
     if kind == "pair":
-        return Pair(span, _item(node.children[0], name, lines, span_of),
-                    _item(node.children[1], name, lines, span_of))
+        return Pair(span, _item(node.children[0], name, lines, span_of, tables),
+                    _item(node.children[1], name, lines, span_of, tables))
     if kind in ("call", "group"):
         children = list(node.children)
         head = str(children.pop(0)) if kind == "call" else None
-        args = []
+        args = tables.get((span.line, span.column), []) if kind == "call" else []
         for ch in children:
             if getattr(ch, "data", None) == "args":
-                args = [_item(a, name, lines, span_of) for a in ch.children]
+                args = [_item(a, name, lines, span_of, tables) for a in ch.children]
         return Call(span, head, args) if kind == "call" else Group(span, args)
     raise AssertionError(kind)  # pragma: no cover
 

@@ -20,6 +20,8 @@ from __future__ import annotations
 import functools
 import re
 
+import numpy as np
+
 from ..errors import NetlistError, ParameterError, SourceSpan
 
 SCALE = {"f": 1e-15, "p": 1e-12, "n": 1e-9, "u": 1e-6, "µ": 1e-6, "m": 1e-3, "k": 1e3,
@@ -87,13 +89,21 @@ def pint_dimension_matches(unit: str, slot: str) -> bool:
 
 def convert(text: str, slot: str, span: SourceSpan, *, name: str, ambient: float, gas) -> float:
     """Convert a literal like ``496kPa``, ``2k`` or ``0.566`` for ``slot``."""
-    from ..units import GAUGE_UNITS, SLOTS, example, pretty, to_internal
+    from ..units import example
 
     parts = split(text)
     if parts is None:
         raise NetlistError(f"{name}: cannot read {text!r} as a number",
                            span=span, hint=f"{slot} is written like {example(slot)}")
-    magnitude, suffix = parts
+    return convert_magnitude(*parts, slot, span, name=name, ambient=ambient, gas=gas)
+
+
+def convert_magnitude(magnitude, suffix: str, slot: str, span: SourceSpan, *, name: str,
+                      ambient: float, gas):
+    """:func:`convert` of a number already split from its unit ``suffix``; ``magnitude``
+    may be an array (a TABLE column: one conversion for all its values)."""
+    from ..units import GAUGE_UNITS, SLOTS, example, pretty, to_internal
+
     if not suffix:
         return magnitude
     gauge = suffix in GAUGE_UNITS
@@ -107,8 +117,9 @@ def convert(text: str, slot: str, span: SourceSpan, *, name: str, ambient: float
         raise NetlistError(f"{name}: unknown unit {_cut(suffix)!r}", span=span,
                            hint=f"{name} needs {pretty(SLOTS[slot])}, e.g. {example(slot)}")
     try:
-        return float(to_internal(magnitude, unit, slot, gauge=gauge, ambient_kpa=ambient,
-                                 gas=gas, name=name))
+        value = to_internal(magnitude, unit, slot, gauge=gauge, ambient_kpa=ambient, gas=gas,
+                            name=name)
+        return np.asarray(value, float) if isinstance(magnitude, np.ndarray) else float(value)
     except ParameterError as err:
         if err.message.startswith(f"{name}: unknown unit"):
             raise NetlistError(f"{name}: unknown unit {_cut(suffix)!r}", span=span,

@@ -264,3 +264,97 @@ def test_a_meas_param_of_the_measurements_above_it_runs():
     deck = parse_netlist(MEAS + ".meas tran twice PARAM {sqrt(pmax)**2 * 2 + 0*pi}\n")
     result = run_deck(deck)
     assert result.measures["twice"] == pytest.approx(2 * result.measures["pmax"], rel=1e-12)
+
+
+TABLE_HEAD = "P1 a 200kPa\nR1 a act 1\npv_volume A1 act table=TABLE("
+#: pairs over '+' lines with a comment line between, in every kind of unit a value can have
+TABLE_BODY = ("1bar 20mL\n+ 150kPa 0.021L , 2bar 30mL\n* comment\n+ 30psig 31e+0mL 3.5bar "
+              "32000uL\n+ 400 33 4.5bar 3.5e1mL 5bar 0.036k")
+
+
+def _table(body):
+    return parse_netlist(TABLE_HEAD + body + ")\n").circuit.elements["A1"].params["table"]
+
+
+def test_a_table_of_plain_numbers_is_read_without_lark_to_the_same_values():
+    """A TABLE body of plain numbers is read a column at a time (issue 33, class 8); a
+    comma sends the same body through lark: the values are identical, unit by unit."""
+    from pneunet.netlist.syntax import RawArgs, parse_text
+
+    fast, slow = _table(TABLE_BODY.replace(" , ", " ")), _table(TABLE_BODY)
+    assert fast[0].tolist() == slow[0].tolist() == [100, 150, 200, 30 * 6.894757293168361
+                                                    + 101.325, 350, 400, 450, 500]
+    assert fast[1].tolist() == slow[1].tolist() == [20, 21, 30, 31, 32, 33, 35, 36]
+    call = parse_text(TABLE_HEAD + "1 2 3 4)\n").statements[2].items[-1].value
+    assert isinstance(call.args, RawArgs) and [a.text for a in call.args] == list("1234")
+    assert (call.args[3].span.line, call.args[3].span.column) == (3, 36)
+
+
+@pytest.mark.parametrize("value, message", [
+    ("20kPa", "table needs mL, got kPa"), ("20xyz", "unknown unit 'xyz'"), ("1e999mL", "too large"),
+    ("1e-400mL", "underflows to 0"), ("1e-120mL", "too small to compute with"),
+    ("nosuch", "cannot read 'nosuch' as a number"),
+])
+def test_a_bad_value_deep_in_a_long_table_is_located_at_its_line_and_column(value, message):
+    rows = [f"+ {100 + i}kPa {20 + i}mL" for i in range(2000)]
+    rows[1234] = f"+ {100 + 1234}kPa {value}"
+    with pytest.raises(NetlistError) as info:
+        parse_netlist(TABLE_HEAD + "\n" + "\n".join(rows) + ")\n")
+    assert (info.value.span.line, info.value.span.column) == (4 + 1234, 11)
+    assert message in info.value.message
+
+
+def test_a_table_may_name_parameters_and_hold_zero():
+    for body in ("0 10 1bar 20mL 2bar 30mL 3bar v3", "0 10 1bar 20mL 2bar {v2 * 1} 3bar v3"):
+        deck = parse_netlist(".param v2=30mL v3=40mL\n" + TABLE_HEAD + body + ")\n")
+        table = deck.circuit.elements["A1"].params["table"]
+        assert table[0].tolist() == [0, 100, 200, 300] and table[1].tolist() == [10, 20, 30, 40]
+
+
+def test_a_table_of_a_hundred_thousand_pairs_is_read_in_seconds():
+    """2.3 MB; 300,000 pairs took 26–44 s and 895 MB through lark (issue 33, class 8)."""
+    rows = [" ".join(f"{100 + 1e-3 * (10 * r + i):.3f}kPa {10 + 1e-4 * (10 * r + i):.4f}mL"
+                     for i in range(10)) for r in range(10_000)]
+    text = TABLE_HEAD + "\n+ ".join(rows) + ")\n"
+    start = time.perf_counter()
+    table = parse_netlist(text).circuit.elements["A1"].params["table"]
+    assert time.perf_counter() - start < 5  # 1.2 s; through lark 15 s
+    assert len(table[0]) == 100_000 and table[1][-1] == pytest.approx(19.9999)
+
+
+@pytest.mark.parametrize("line, message", [
+    ('pv_volume A2 act table="my TABLE(1 2).csv"', "cannot find included file 'my TABLE(1 2).csv'"),
+    ("R2 act atm {1 + TABLE(1 2)}", "syntax error in expression {1 + TABLE(1 2)}: unexpected '2'"),
+], ids=["in a string", "in braces"])
+def test_table_text_inside_a_string_or_braces_is_left_as_written(line, message):
+    with pytest.raises(NetlistError) as info:
+        parse_netlist("P1 a 200kPa\nR1 a act 1\nV1 act 1mL\n" + line + "\n")
+    assert message in info.value.message
+
+
+@pytest.mark.parametrize("body, message, column", [
+    ("1bar (2mL) 2bar 3mL", "TABLE needs two or more pairs of values, got 3 value(s)", 24),
+    ("x=1 2 3 4", "TABLE needs two or more pairs of values, got 4 value(s)", 24),
+    ('"x" 1mL 2bar 3mL', 'A1: table expects a number, got "x"', 30),
+    ("1bar 2mL\n2bar 3mL", "unexpected end of line", 38),
+], ids=["group", "pair", "string", "no +"])
+def test_a_table_body_that_is_not_plain_numbers_is_read_by_lark(body, message, column):
+    with pytest.raises(NetlistError) as info:
+        parse_netlist(TABLE_HEAD + body + ")\n")
+    assert info.value.message == message and info.value.span.column == column
+
+
+def test_an_unclosed_table_is_an_error_at_the_end_of_its_line():
+    with pytest.raises(NetlistError) as info:
+        parse_netlist(TABLE_HEAD + "1bar 2mL 2bar 3mL\nV1 act 1mL\n")
+    assert info.value.message == "unexpected end of line"
+    assert (info.value.span.line, info.value.span.column) == (3, 47)
+
+
+def test_a_bad_value_in_a_second_table_is_located_on_its_own_line():
+    text = (TABLE_HEAD + "1bar 2mL\n+ 2bar 3mL)\nR2 a act2 1\npv_volume A2 act2 table=TABLE(1bar 2mL"
+            "\n\n+ 2bar 3xyz)\n")
+    with pytest.raises(NetlistError) as info:
+        parse_netlist(text)
+    assert (info.value.span.line, info.value.span.column) == (8, 8)
+    assert "unknown unit 'xyz'" in info.value.message
