@@ -10,6 +10,8 @@ import sys
 
 from ..csvdata import TRACE_MAX_ROWS
 from . import netlist_args
+from .executors import MAX_WORKERS
+from .numbers import real, whole, within
 from .outputs import output_file
 
 
@@ -54,24 +56,25 @@ def register(subparsers) -> None:
     p.add_argument("--effects-module", action="append", default=[], metavar="MODULE",
                    help="import this Python module (file path or dotted name) first: it "
                         "registers your own circuit effects")
-    p.add_argument("--train-fraction", type=float, default=0.5,
+    p.add_argument("--train-fraction", type=real(above=0, below=1), default=0.5,
                    help="fraction of the cycles used for fitting with --candidates (0.5)")
-    p.add_argument("--max-nfev", type=int, default=40,
+    p.add_argument("--max-nfev", type=whole(1), default=40,
                    help="simulation budget of each fit's least-squares stage, Jacobian "
                         "included (40; a candidate effect's fit gets 4x: raise it when the "
                         "best candidate's fit stops short of the noise floor)")
-    p.add_argument("--workers", type=int, default=None,
+    p.add_argument("--workers", type=whole(1, MAX_WORKERS), default=None,
                    help="processes for parallel finite differences (default: 2 if 2 cores)")
-    p.add_argument("--plot", metavar="PNG", default=None, help="fit and residual plot")
+    p.add_argument("--plot", metavar="PNG", default=None, type=output_file(plot=True),
+                   help="fit and residual plot")
     p.add_argument("--netlist-out", metavar="FILE", default=None, type=output_file(),
                    help="write the fitted circuit as a netlist: yours with the fitted values "
                         "and (with --candidates) the accepted effects written in; run it "
                         "with pneunet run")
-    p.add_argument("--waterfall", metavar="PNG", default=None,
+    p.add_argument("--waterfall", metavar="PNG", default=None, type=output_file(plot=True),
                    help="error waterfall plot (with --candidates)")
     p.add_argument("--json", action="store_true",
                    help="print only the result as JSON on stdout (solver messages: stderr)")
-    p.add_argument("--max-rows", type=int, default=TRACE_MAX_ROWS, metavar="N",
+    p.add_argument("--max-rows", type=whole(5), default=TRACE_MAX_ROWS, metavar="N",
                    help=f"read at most N samples; a longer recording is thinned evenly with a "
                         f"notice (default {TRACE_MAX_ROWS})")
     p.add_argument("--no-progress", action="store_true", help="no progress messages on stderr")
@@ -147,6 +150,7 @@ def main(args) -> int:
                              hint="the netlist time of the first sample, in seconds")
     if not params:
         raise ParameterError("nothing to fit", hint="add --fit NAME=GUESS:LOW:HIGH")
+    within(args.max_nfev, "--max-nfev", netlist_args.limits(args), "max_samples")
     data = _recording(args)
     if args.netlist:
         from ..analysis.sweep import NetlistBuilder

@@ -9,8 +9,8 @@ import math
 
 
 def real(low: float | None = None, high: float | None = None, *, above: float | None = None,
-         unit: str = ""):
-    """A finite number ``>= low`` (or ``> above``) and ``<= high``."""
+         below: float | None = None, unit: str = ""):
+    """A finite number ``>= low`` (or ``> above``) and ``<= high`` (or ``< below``)."""
     def check(text: str) -> float:
         try:
             value = float(text)
@@ -22,6 +22,8 @@ def real(low: float | None = None, high: float | None = None, *, above: float | 
             raise argparse.ArgumentTypeError(f"{text}: must be > {above:g}{unit}")
         if low is not None and value < low:
             raise argparse.ArgumentTypeError(f"{text}: must be >= {low:g}{unit}")
+        if below is not None and not value < below:
+            raise argparse.ArgumentTypeError(f"{text}: must be < {below:g}{unit}")
         if high is not None and value > high:
             raise argparse.ArgumentTypeError(f"{text}: must be <= {high:g}{unit}")
         return value

@@ -16,6 +16,8 @@ OSC = str(ROOT / "netlists" / "oscillator_design.pn")
 BENCH = str(ROOT / "examples" / "data" / "bench_axi.csv")
 SWEEP = ["sweep", OSC, "--analysis", "meas", "--workers", "1", "--no-progress"]
 DESIGN = ["design", OSC, "--vary", "Rout=0.6:3", "--target", "period=3s", "--workers", "1"]
+TRACE = ["fit-trace", str(ROOT / "examples" / "data" / "oscillator_rec.csv"),
+         str(ROOT / "netlists" / "oscillator.pn"), "--fit", "Rout=1:0.5:2"]
 
 #: a size fuzzer: each count a user can type, far past its limit (message fragment)
 SIZES = [
@@ -62,6 +64,14 @@ NUMBERS = [
     (["piping", "--level", "1.5"], "argument --level: 1.5: must be <= 0.999"),
     (["piping", "--actuators", "0"], "argument --actuators/-n: 0: must be >= 1"),
     (["check", OSC, "--limit", "max_subckt_depth=100000"], "can be at most 150"),
+    (TRACE + ["--train-fraction", "1"], "argument --train-fraction: 1: must be < 1"),
+    (TRACE + ["--train-fraction", "0"], "argument --train-fraction: 0: must be > 0"),
+    (TRACE + ["--train-fraction", "nan"], "'nan': a finite number is needed"),
+    (TRACE + ["--max-nfev", "0"], "argument --max-nfev: 0: must be >= 1"),
+    (TRACE + ["--max-nfev", "2.5"], "argument --max-nfev: '2.5' is not a whole number"),
+    (TRACE + ["--max-nfev", "1e9"], "--max-nfev asks for 1e+09 (limit max_samples = 100000)"),
+    (TRACE + ["--workers", "0"], "argument --workers: 0: must be >= 1 and <= 256"),
+    (TRACE + ["--max-rows", "4"], "argument --max-rows: 4: must be >= 5"),
 ]
 
 
@@ -119,6 +129,7 @@ def _outputs(tmp_path):
                              path], message)]
         plot = path + ".png" if kind != "folder" else path
         cases += [(["branches", "--plot", plot], message), (["piping", "--plot", plot], message),
+                  (TRACE + ["--plot", plot], message), (TRACE + ["--waterfall", plot], message),
                   (SWEEP + ["--param", "Rout=lin:1:2:2", "--plot", plot], message),
                   (DESIGN + ["--yield", "2", "--tolerance", "X1.pclose=±5kPa", "--tornado",
                              plot], message)]
@@ -132,7 +143,7 @@ def _outputs(tmp_path):
 
 def test_every_output_path_is_checked_before_any_work(tmp_path, capsys):
     cases = _outputs(tmp_path)
-    assert len(cases) == 38
+    assert len(cases) == 44
     for argv, message in cases:
         start = time.perf_counter()
         assert main(argv) == 2, argv
