@@ -10,6 +10,7 @@ import math
 from dataclasses import fields
 
 from .. import elements
+from ..errors import printable
 from ..engine.options import SimulationOptions
 from ..valve_params import PAPER_VALVES, ValveParams
 from ..waveforms import Waveform
@@ -59,7 +60,9 @@ def print_circuit(circuit, *, header: bool = True) -> str:
     """Netlist text (options, models, elements, .ic) for ``circuit``."""
     lines = []
     if header:
-        lines.append(f"* {circuit.title}" if circuit.title else "* pneunet circuit")
+        # a title's every line a comment, its control characters escaped: never a statement
+        lines += [f"* {printable(t)}" for t in circuit.title.splitlines()] or \
+            ["* pneunet circuit"]
     defaults = SimulationOptions()
     opts = [f"{f.name}={getattr(circuit.options, f.name)}" if f.name in ("gas", "fluid") else
             f"{f.name}={_num(getattr(circuit.options, f.name))}"

@@ -358,3 +358,17 @@ def test_a_bad_value_in_a_second_table_is_located_on_its_own_line():
         parse_netlist(text)
     assert (info.value.span.line, info.value.span.column) == (8, 8)
     assert "unknown unit 'xyz'" in info.value.message
+
+
+def test_a_title_with_line_breaks_is_written_as_comments_only():
+    """Circuit("my\\nR9 x y 1") printed R9 as an element of the parsed-back netlist."""
+    from pneunet import Circuit
+    from pneunet.netlist import print_circuit
+
+    c = Circuit("my\nR9 x y 1\r\n\x1b[31m red")
+    c.pressure_source("P1", "a", 200)
+    c.resistor("R1", "a", "atm", R=1)
+    text = print_circuit(c)
+    assert "\x1b" not in text and "* \\x1b[31m red" in text
+    back = parse_netlist(text).circuit
+    assert list(back.elements) == ["P1", "R1"] and back.title == "my"
