@@ -25,11 +25,11 @@ def inline_table(call, slots, number, convert):
         raise _err(f"TABLE needs two or more pairs of values, got {len(args)} value(s)", call,
                    "e.g. table=TABLE(100kPa 20mL 200kPa 30mL)")
     if isinstance(args, RawArgs):
-        return tuple(_column(args, k, slots[k], number, convert) for k in (0, 1))
+        return tuple(column(args, k, slots[k], number, convert) for k in (0, 1))
     return ([number(a, slots[0]) for a in args[0::2]], [number(a, slots[1]) for a in args[1::2]])
 
 
-def _column(args, first, slot, number, convert) -> list:
+def column(args: RawArgs, first: int, slot: str, number, convert) -> list:
     """Every second value of ``args`` from ``first``, as :func:`inline_table`'s ``number``
     reads them (the same errors at the same places), but a unit at a time."""
     texts = args.texts[first::2]

@@ -252,6 +252,13 @@ class _Builder(ModelCards, AnalysisStatements, MeasureStatements, WaveformCalls)
             self.converted[text, slot] = value
         return value
 
+    def _converter(self, name):
+        """``convert(magnitudes, unit, slot, span)`` of a TABLE or PWL column
+        (:func:`.datafiles.column`): :meth:`_number`'s conversion for many values at once."""
+        return lambda m, unit, slot, span: convert_magnitude(
+            m, unit, slot, span, name=name, ambient=self.options.ambient,
+            gas=self.options.volume_flow_fluid)
+
     def has_node(self, node: str) -> bool:
         """Whether an element added so far touches ``node``; the set grows with the circuit
         (``circuit.nodes`` walks every element: once per ``.ic`` in an array was O(N²))."""
@@ -455,9 +462,7 @@ class _Builder(ModelCards, AnalysisStatements, MeasureStatements, WaveformCalls)
         if spec.kind == "table" and isinstance(item, Call) and item.name.upper() == "TABLE":
             return inline_table(item, family.table_slots,
                                 lambda a, slot: self._number(a, slot, label, scope),
-                                lambda m, unit, slot, span: convert_magnitude(
-                                    m, unit, slot, span, name=label, ambient=self.options.ambient,
-                                    gas=self.options.volume_flow_fluid))
+                                self._converter(label))
         if spec.kind == "table":
             return read_data_file(item, self.source.policy, family.table_slots, self.options,
                                   label, strict=True)

@@ -53,9 +53,10 @@ class Call(Item):
 
 
 class RawArgs(Sequence):
-    """The plain words of a ``TABLE(…)`` body, read without lark (a 300,000-pair table
-    took 40 s there): their texts and (line, column) places; a :class:`Word` is made only
-    when an item is asked for (an error, or a TABLE where it does not belong)."""
+    """The plain words of a ``TABLE(…)`` or ``PWL(…)`` body, read without lark (a
+    300,000-pair table took 40 s there): their texts and (line, column) places; a
+    :class:`Word` is made only when an item is asked for (an error, a PWL value, or a
+    TABLE where it does not belong)."""
 
     def __init__(self, texts: list, places: list, name: str, lines: list, via: tuple):
         self.texts, self.places = texts, places
@@ -228,14 +229,14 @@ def parse_text(text: str, name: str = "<netlist>", path: Path | None = None, *,
     return src
 
 
-_TABLE_OPEN = re.compile(r"(?<![^\s=(,])TABLE\(", re.IGNORECASE)
+_TABLE_OPEN = re.compile(r"(?<![^\s=(,])(?:TABLE|PWL)\(", re.IGNORECASE)
 _CONTINUED = re.compile(r"(?:\n[ \t\r]*)+\+")
 
 
 def _plain_tables(clean: str, name, lines, via) -> tuple[str, dict]:
-    """``clean`` with the body of each ``TABLE(…)`` that holds only plain words (numbers
-    with their units, on ``+`` lines) blanked out, and those bodies as :class:`RawArgs` by
-    the (line, column) of their TABLE.  A body with anything else (braces, commas, quotes,
+    """``clean`` with the body of each ``TABLE(…)`` or ``PWL(…)`` that holds only plain
+    words (numbers with their units, on ``+`` lines) blanked out, and those bodies as
+    :class:`RawArgs` by the (line, column) of their call.  A body with anything else (braces, commas, quotes,
     '=', parentheses) is left to lark, which reports what is wrong in it."""
     tables, out, done, counted, line = {}, [], 0, 0, 1
     for match in _TABLE_OPEN.finditer(clean):

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from ..errors import PneunetError
 from . import plausible
-from .datafiles import read_data_file
+from .datafiles import column, read_data_file
 from .located import did_you_mean as _close, error_at as _err
-from .syntax import Call, Pair, Word
+from .syntax import Call, Pair, RawArgs, Word
 
 
 class WaveformCalls:
@@ -39,12 +39,14 @@ class WaveformCalls:
             return wf.PiecewiseLinear(tuple(times), tuple(values))
         if kind == "PWL":
             args = call.args
-            if any(isinstance(a, Pair) for a in args):
+            if not isinstance(args, RawArgs) and any(isinstance(a, Pair) for a in args):
                 raise _err("PWL takes time value pairs", call)
             if len(args) < 2 or len(args) % 2:
                 raise _err(f"PWL needs pairs of time and value, got {len(args)} number(s)", call,
                            "e.g. PWL(0 96kPa 1 296kPa 2 296kPa)")
-            times = [self._number(a, "time", "PWL time", scope) for a in args[0::2]]
+            times = column(args, 0, "time", lambda a, slot: self._number(a, slot, "PWL time", scope),
+                           self._converter("PWL time")) if isinstance(args, RawArgs) else \
+                [self._number(a, "time", "PWL time", scope) for a in args[0::2]]
             values = [self._source_level(a, slot, "PWL value", scope) for a in args[1::2]]
             for i in range(1, len(times)):
                 if times[i] < times[i - 1]:
