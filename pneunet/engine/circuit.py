@@ -237,6 +237,7 @@ class Circuit:
 
     def set_initial(self, node: str, pressure) -> None:
         """Initial pressure of a node (netlist ``.ic``), kPa or a string with unit."""
+        _check_name(str(node), "node name", f"node {node!r}")
         self.initial[node] = self._number(pressure, "pressure", f"initial pressure of {node}",
                                           f"node {node}")
 

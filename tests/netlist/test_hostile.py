@@ -226,6 +226,8 @@ def test_a_python_name_that_would_not_parse_back_is_refused(name):
     assert repr(name) in info.value.message
     with pytest.raises(ParameterError, match="node name"):
         c.resistor("R1", name, "atm", R=1)
+    with pytest.raises(ParameterError, match="node name"):
+        c.set_initial(name, 200)
     c.pressure_source("P1", "a", 200)
     c.resistor("R1.x:[2]#-_", "a", "b", R=1)
     c.volume("V1", "b", V="1mL")
