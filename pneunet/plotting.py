@@ -20,6 +20,16 @@ def pyplot():
     return plt
 
 
+def figure_and_patches():
+    """(matplotlib's ``Figure``, ``matplotlib.patches``) on the Agg backend: for drawings
+    made without pyplot's global state (the schematic)."""
+    from matplotlib import patches
+    from matplotlib.figure import Figure
+
+    pyplot()  # the Agg backend
+    return Figure, patches
+
+
 def save(fig, path) -> Path:
     """Save ``fig`` as PNG at ``path`` (folders created), close it, return the path."""
     path = Path(path)

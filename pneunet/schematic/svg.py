@@ -1,5 +1,5 @@
 """A :class:`~pneunet.schematic.geometry.Layout` as SVG text (wires first, then symbols
-and labels; control lines dashed), and as PNG or PDF through matplotlib."""
+and labels; control lines dashed), and as PNG or PDF through matplotlib (pneunet.plotting)."""
 from __future__ import annotations
 
 from xml.sax.saxutils import escape
@@ -45,11 +45,10 @@ def to_svg(lay, title: str = "") -> str:
 
 def save_raster(lay, path: str, title: str = "") -> None:
     """PNG or PDF (by the suffix of ``path``) of the layout, drawn with matplotlib."""
-    import matplotlib
+    from ..plotting import figure_and_patches
 
-    matplotlib.use("Agg", force=False)
-    from matplotlib.figure import Figure
-    from matplotlib.patches import Circle, Polygon
+    Figure, patches = figure_and_patches()
+    Circle, Polygon = patches.Circle, patches.Polygon
 
     dpi = 100
     fig = Figure(figsize=(lay.width / dpi, lay.height / dpi), dpi=dpi)
