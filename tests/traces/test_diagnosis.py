@@ -148,10 +148,11 @@ def test_a_candidate_whose_fit_fails_is_reported_not_a_crash(monkeypatch):
     def failing(*args, **kwargs):
         raise SolverError("IDA stopped at t = 10 s", time=10.0)
 
-    monkeypatch.setattr(module, "_fit_effects", failing)
+    monkeypatch.setattr(module._Fitting, "_fit", failing)  # every start of every candidate
     d = diagnose_trace(oscillator, oscillator_record(12.0, noise=0.4, seed=1, V_out=1.5),
                        PARAMS, node="tank", effects=[DeadVolume("out")])
     j = d.to_json()
     assert j["verdict"] == "unexplained" and j["accepted"] == []
     row = next(r for r in j["ranking"] if r["effect"] == "dead_volume@out")
     assert row["held_out_rms"] is None and row["note"].startswith("fit failed: IDA stopped")
+    assert row["status"] == "failed"
