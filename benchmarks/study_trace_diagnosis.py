@@ -55,7 +55,7 @@ DRIVEN = {
     "control-tube": ({"tube_ctrl": (5.0, 5.0)}, "tube@Xin.ctrl"),
     "heat+control-tube": ({"heat_tau": 1.0, "tube_ctrl": (5.0, 5.0)},
                           "volume_heat_transfer + tube@Xin.ctrl"),
-    "leak": ({"leak": 40.0}, "unexplained"),
+    "leak": ({"leak": 15.0}, "unexplained"),
     "compliant": ({"compliance": 0.004}, "unexplained"),
 }
 DRIVEN_PARAMS = {"Rtube.R": (0.2, 0.02, 2.0), "Amck.V": (25.0, 5.0, 200.0)}

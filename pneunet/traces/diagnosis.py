@@ -343,8 +343,10 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
                     if eff.name not in fits and eff.name not in fitting.failed:
                         continue
                     say(f"fitting {eff.name} from a second start")
-                    fit = fitting.start(eff, {k: _second_start(v, row["x"].get(k))
-                                              for k, v in eff.params.items()}, 4 * max_nfev)
+                    second = {k: _second_start(v, row["x"].get(k))
+                              for k, v in eff.params.items()}
+                    fit = fitting.start(eff, {**fitting.base_start(guesses=True), **second},
+                                        4 * max_nfev)
                     if fit is not None and (eff.name not in fits or fit.error(test)
                                             < fits[eff.name].error(test)):
                         fits[eff.name] = fit
@@ -421,7 +423,7 @@ class _Fitting:
              for k, (_, lo, hi) in self.params.items()}
         for e in effs:
             p.update(e.params)
-        x = {k: self.base.values[k] for k in self.params}
+        x = self.base_start()
         x.update(x_start)
         for k in p:
             x.setdefault(k, p[k][0])
@@ -429,6 +431,17 @@ class _Fitting:
                          window=self.train, effects=effs, max_nfev=max_nfev, pool=self.pool,
                          options=self.options, x_start=x, where=self.where,
                          start_state=self.state)
+
+    def base_start(self, guesses: bool = False) -> dict:
+        """Starting values of the base parameters: the base fit's, except where it
+        stopped at a bound of its range (a base model bent to mimic missing physics),
+        or everywhere with ``guesses``: the user's guesses."""
+        out = {}
+        for k, (guess, lo, hi) in self.params.items():
+            v = self.base.values[k]
+            at_bound = abs(math.log(v / lo)) < 0.01 or abs(math.log(hi / v)) < 0.01
+            out[k] = guess if guesses or at_bound else v
+        return out
 
     def start(self, eff, x_start, max_nfev) -> TraceFit | None:
         """The fit of ``eff`` from ``x_start`` (its parameters; the base ones from the

@@ -84,7 +84,7 @@ def test_driven_hidden_effect_is_named(case, expected):
     assert d.verdict == "explained" and set(d.accepted) == expected, d.report()
 
 
-@pytest.mark.parametrize("case", [(("leak", 40.0),), (("compliance", 0.004),)])
+@pytest.mark.parametrize("case", [(("leak", 15.0),), (("compliance", 0.004),)])
 def test_driven_physics_outside_the_library_is_unexplained(case):
     d = driven(case)
     assert d.verdict == "unexplained", d.report()
