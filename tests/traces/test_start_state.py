@@ -72,7 +72,7 @@ def test_record_start_reads_the_first_samples_and_the_branch(long_record, start)
     rec = mid_run(long_record, start)[["time_s", "p_tank_kPa"]]
     clean = mid_run(oscillator_record(20.0, noise=0.0, seed=4), start)
     model = TraceModel(oscillator, {"V": 50.0})
-    state = choose_start(model, dict(TRUE), read_trace(rec))
+    state = choose_start(model, dict(TRUE), read_trace(rec), "record")
     assert state.mode == "record"
     assert state.pressures["tank"] == pytest.approx(clean["p_tank_kPa"][0], abs=1.0)
     sol = model.with_state(state).simulate(dict(TRUE), 0.5)
@@ -100,13 +100,16 @@ def _covers(fit, truth):
 
 @pytest.mark.slow
 def test_mid_run_oscillator_fit_covers_the_truth_where_rest_fails():
-    """Logger started 7.3 s after switch-on: the start read from the record gives
-    intervals covering R_out, R_vent and V; forced to start at rest, the same fit
-    is 3× worse and 10 % off the truth (the simulated start-up is compared with a
-    settled record)."""
+    """Logger started 7.3 s after switch-on: the settled cycle (auto: the record's
+    oscillation is settled) and the start read from the record both give intervals
+    covering R_out, R_vent and V; forced to start at rest, the same fit is 3× worse and
+    10 % off the truth (the simulated start-up is compared with a settled record)."""
     rec = mid_run(oscillator_record(19.3, noise=0.4, seed=1), 7.3)
-    fit = fit_trace(oscillator, rec, PARAMS, node="tank", window=(0.0, 6.0))
-    assert fit.start_state.mode == "record"
+    auto = fit_trace(oscillator, rec, PARAMS, node="tank", window=(0.0, 6.0))
+    assert auto.start_state.mode == "settled"
+    assert all(_covers(auto, TRUE).values()), (auto.values, auto.ci)
+    fit = fit_trace(oscillator, rec, PARAMS, node="tank", window=(0.0, 6.0),
+                    start_state="record")
     assert all(_covers(fit, TRUE).values()), (fit.values, fit.ci)
     # compared from the first cycle start on (the unrecorded states settle before it),
     # and the diagnosis' screen compares the same samples as the fit's Jacobian
