@@ -17,8 +17,8 @@ state compares a start-up transient with a settled recording.  Three start state
 ``auto`` (the default) takes ``rest`` when the recorded storage nodes' first values
 agree with the rest state within their noise and every recorded algebraic node lies on
 the rest state's branch; else, for an autonomous circuit whose recorded oscillation is
-already settled (its first full cycle as long as the later ones, within 3 %),
-``settled``; else ``record``.  A driven circuit (sources that vary during the
+already settled (its first full cycle as long as the later ones, within 3 %, and its
+first samples within the later cycles' range), ``settled``; else ``record``.  A driven circuit (sources that vary during the
 record) is simulated on the record's own clock: the netlist time of the first sample is
 ``time_offset`` (by default the first time stamp of the file).
 """
@@ -348,7 +348,8 @@ def _pick_branches(model, values, data, state, nodes, rest) -> StartState:
 def _settled_if_steady(data, where) -> StartState | None:
     """The settled start for a record of an autonomous circuit whose oscillation is
     already settled — its first full cycle lasts within :data:`STEADY_PERIOD` of the
-    later ones' median — else None (a record of the start-up: started from its state)."""
+    later ones' median, and its first samples lie within the later cycles' range — else
+    None (a record of the start-up: started from its state)."""
     from .align import Alignment
 
     times = data["time_s"].to_numpy()
@@ -357,7 +358,11 @@ def _settled_if_steady(data, where) -> StartState | None:
         if a is None or len(a.starts) < 4:
             continue
         periods = np.diff(a.starts)
-        if abs(periods[0] / np.median(periods[1:]) - 1.0) <= STEADY_PERIOD:
+        y = data[c].to_numpy()
+        later = y[times >= a.starts[0]]
+        margin = 0.05 * float(np.ptp(later))
+        within = later.min() - margin <= first_value(times, y)[0] <= later.max() + margin
+        if within and abs(periods[0] / np.median(periods[1:]) - 1.0) <= STEADY_PERIOD:
             state = _settled(data, where)
             return StartState("settled", settle=state.settle,
                               reason="off rest, and its oscillation is settled: " + state.reason)

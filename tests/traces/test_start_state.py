@@ -170,3 +170,17 @@ def test_unrecorded_storage_is_fitted_from_a_recorded_junction():
     assert fit.start_state.mode == "record" and list(fit.start_state.fitted) == ["p0@muscle"]
     truth = {"Rtube.R": 0.24, "Amck.V": 30.0, "p0@muscle": float(clean["p_muscle_kPa"][0])}
     assert all(_covers(fit, truth).values()), (fit.values, fit.ci, truth)
+
+
+def test_auto_start_is_settled_only_for_a_settled_oscillation(long_record):
+    """Started 6.25 s after switch-on the oscillation is settled (its first full cycle as
+    long as the later ones): settled, simulated from rest for 4 periods and the time to
+    the first cycle; started 0.1 s after switch-on, in the start-up (the tank still
+    rising from 96 kPa, below the cycle's minimum): from the record's state."""
+    model = TraceModel(oscillator, {"V": 50.0})
+    late = choose_start(model, dict(TRUE), read_trace(mid_run(long_record, 6.25)))
+    assert late.mode == "settled"
+    period = 1.59  # the stand-alone oscillator's settled period at V = 50 mL, s
+    assert 4 * period < late.settle < 5 * period + 0.1
+    early = choose_start(model, dict(TRUE), read_trace(mid_run(long_record, 0.1)))
+    assert early.mode == "record"
