@@ -15,7 +15,7 @@ the oscillator with each effect written out by hand, :mod:`.standalone`), 0.4 kP
   effect named, and the report says where the residual sits.
 
 Each diagnosis takes about a minute (``slow``): the default suite runs the clean, the
-Richer–Hurmuzlu, the dead-volume and the creep cases; the others are marked ``study``
+Richer–Hurmuzlu and the dead-volume cases; the others are marked ``study``
 (``python -m pytest -m study``; CI runs both).  ``benchmarks/study_trace_diagnosis.py``
 prints the same cases as a table.
 """
@@ -89,8 +89,9 @@ def test_clean_recording_is_adequate_with_intervals_covering_the_truth():
 
 #: the cases the default suite runs; the others are marked ``study`` (a minute each:
 #: ``python -m pytest -m study``, which CI runs too)
-IN_SUITE = ("dead volume at the valve output (1.5 mL)",
-            "membrane creep (p_close drifts 0.4 kPa/s)")
+#: the default suite's cases (the others, and the unexplained creep whose candidates are
+#: each fitted from two starts, ~90 s, run with -m study)
+IN_SUITE = ("dead volume at the valve output (1.5 mL)",)
 
 
 def _cases(names):
