@@ -16,11 +16,13 @@ import numpy as np
 import pandas as pd
 from scipy.integrate import solve_ivp
 
+from .standalone import resistor as line  # the quadrature line, eq. 4 (1 kPa² band)
+from .standalone import root
+
 M_AIR = 28.965  # g/mol
 R_GAS = 8.314462618  # J/(mol K)
 T_WALL = 293.15  # K
 GAMMA = 1.4
-BAND = 1.0  # kPa², zero-flow band of the regularised root
 MIRROR = {"Rf": 0.400, "pclose": 21.86, "ptrans": 96.02, "e": 1.65, "ain": 0.578,
           "aout": 0.459}
 MIRROR_BACKWARD = {"Rf": 0.395, "pclose": 19.52, "ptrans": 93.44, "e": 1.62, "ain": 0.588,
@@ -39,16 +41,6 @@ DEFAULTS = {"pH": 289.0, "pL": 120.0, "ambient": 96.0, "pc_hi": 496.0, "pc_lo": 
 def capacitance(V_ml, T=T_WALL):
     """Isothermal capacitance M·V/(R·T), mg/kPa."""
     return M_AIR * V_ml / (R_GAS * T)
-
-
-def root(d):
-    """Signed root regularised in a 1 kPa² band."""
-    return d / (d * d + BAND * BAND) ** 0.25
-
-
-def line(pa, pb, R):
-    """Quadrature resistor, mg/s from a to b."""
-    return root(pa * pa - pb * pb) / R
 
 
 def valve(p_in, p_out, p_ctrl):
