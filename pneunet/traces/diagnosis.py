@@ -225,9 +225,10 @@ class _ScreenTask:
         return x[:len(self.x_base)] if info.get("method") != "none" else self.x_base
 
 
-#: the screen's second and third best are fitted fully when their merit (fit-window
-#: residual sum of squares) is within this factor of the best's (rms within 1.5×, the
-#: verdict's tolerance): a clear screen costs one full fit, a close one three
+#: the screen's third best is fitted fully when its merit (fit-window residual sum of
+#: squares) is within this factor of the best's (rms within 1.5×, the verdict's
+#: tolerance); the best two always are (a control-line tube's screen merit is 1.5× a dead
+#: volume's in rms, and only its full fit reaches the floor)
 SCREEN_KEEP = 2.25
 #: largest change of a base parameter (ln value) in one screening step, and the steps
 SCREEN_STEP = 0.25
@@ -266,8 +267,8 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
     as in :func:`~pneunet.traces.fit.fit_trace` (one start state, chosen for the base
     fit, serves every fit); ``effects``: candidate effects (kinds,
     bound effects or their names; default every registered one at every site);
-    ``screen``: how many of the best screened candidates may be fitted fully (those
-    whose screen merit is within :data:`SCREEN_KEEP` of the best's; 4 × ``max_nfev``:
+    ``screen``: how many of the best screened candidates may be fitted fully (the best
+    two, a third within :data:`SCREEN_KEEP` of the best's merit; 4 × ``max_nfev``:
     they have more parameters and start further away), each from its screen's best
     point, and when none reaches the floor each again from a second start;
     ``workers``: processes
@@ -323,8 +324,8 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
             timing["screen_s"] = time.perf_counter() - t0
             timing["screen_simulations"] = sum(r["simulations"] for r in rows)
             t0 = time.perf_counter()
-            close = [r for r in rows[:screen]
-                     if r["rss"] <= SCREEN_KEEP * rows[0]["rss"] or r is rows[0]]
+            close = rows[:min(2, screen)] + [r for r in rows[2:screen]
+                                             if r["rss"] <= SCREEN_KEEP * rows[0]["rss"]]
             for row in close:
                 eff = row["effect"]
                 if not math.isfinite(row["rss"]):
