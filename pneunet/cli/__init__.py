@@ -47,7 +47,7 @@ def main(argv: list[str] | None = None) -> int:
 
     parser = build_parser()
     try:
-        with _printable_stderr():  # argparse quotes the user's text in its errors
+        with _wrapped("stderr", _PrintableStderr):  # argparse quotes the user's text in its errors
             args = parser.parse_args(argv)
     except SystemExit as done:  # --help, --version, or a bad option (argparse said why)
         return done.code if isinstance(done.code, int) else 2
@@ -55,7 +55,7 @@ def main(argv: list[str] | None = None) -> int:
         parser.print_help()
         return 2
     try:
-        with warnings.catch_warnings(), _named_stdout():
+        with warnings.catch_warnings(), _wrapped("stdout", _NamedStdout):
             _show_solver_warnings(quiet=getattr(args, "quiet", False))
             code = int(args.func(args) or 0)
             sys.stdout.flush()  # a full disk or a closed pipe is reported here, not at exit
@@ -136,23 +136,14 @@ class _PrintableStderr:
 
 
 @contextlib.contextmanager
-def _printable_stderr():
-    stream = sys.stderr
-    sys.stderr = _PrintableStderr(stream)
+def _wrapped(name: str, wrapper):
+    """``sys.<name>`` replaced by ``wrapper(sys.<name>)`` while active."""
+    stream = getattr(sys, name)
+    setattr(sys, name, wrapper(stream))
     try:
         yield
     finally:
-        sys.stderr = stream
-
-
-@contextlib.contextmanager
-def _named_stdout():
-    stream = sys.stdout
-    sys.stdout = _NamedStdout(stream)
-    try:
-        yield
-    finally:
-        sys.stdout = stream
+        setattr(sys, name, stream)
 
 
 def _closed_pipe() -> int:
