@@ -12,26 +12,7 @@ from pneunet.netlist import parse_netlist, runner
 
 DOCS = Path(__file__).resolve().parents[2] / "docs"
 
-GAS = """P1 supply 300kPa
-F1 atm supply 10mg/s
-R1 supply a 1
-pipe T1 a b length=1m diameter=4mm
-tube L1 b c length=1m diameter=2mm
-V1 c 5mL
-A1 c V=10mL
-X1 supply out c axi
-Vout out 2mL
-D1 supply d 0.5 pcrack=10kPa
-hysteretic_check_valve D2 supply e d2s R=0.5 pcrack=30kPa preseat=10kPa width=1kPa
-Vd d 2mL
-Ve e 2mL
-accumulator C1 a 20mL 0.1mL/kPa
-pv_actuator P2 b table=TABLE(1bar 20mL 2bar 30mL 3bar 35mL)
-VT VT1 c heat 5mL tau=0.2
-mckibben M1 c L0=20cm D0=12mm theta0=25deg mass=200g damping=20N*s/m
-R2 e atm 2
-R3 d atm 2
-"""
+GAS = (Path(__file__).resolve().parents[1] / "every_kind_gas.pn").read_text()
 LIQUID = """.options fluid=water
 P1 pump 3bar
 orifice O1 pump act 0.5mm

@@ -21,30 +21,7 @@ ROOT = Path(__file__).resolve().parents[2]
 NETLISTS = sorted((ROOT / "netlists").glob("*.pn")) + sorted((ROOT / "examples").rglob("*.pn"))
 SVG = "{http://www.w3.org/2000/svg}"
 #: one element of every built-in kind (tests/netlist/test_every_signal.py)
-EVERY_KIND = """P1 supply 300kPa
-F1 atm supply 10mg/s
-R1 supply a 1
-pipe T1 a b length=1m diameter=4mm
-tube L1 b c length=1m diameter=2mm
-V1 c 5mL
-A1 c V=10mL
-X1 supply out c axi
-Vout out 2mL
-D1 supply d 0.5 pcrack=10kPa
-hysteretic_check_valve D2 supply e d2s R=0.5 pcrack=30kPa preseat=10kPa width=1kPa
-Vd d 2mL
-Ve e 2mL
-accumulator C1 a 20mL 0.1mL/kPa
-pv_actuator P2 b table=TABLE(1bar 20mL 2bar 30mL 3bar 35mL)
-VT VT1 c heat 5mL tau=0.2
-mckibben M1 c L0=20cm D0=12mm theta0=25deg mass=200g damping=20N*s/m
-R2 e atm 2
-R3 d atm 2
-R4 b f 1
-Vf f 1mL
-X2 f atm atm axi
-.tran 10ms 0.2s
-"""
+EVERY_KIND = (ROOT / "tests" / "every_kind_gas.pn").read_text() + 'R4 b f 1\nVf f 1mL\nX2 f atm atm axi\n.tran 10ms 0.2s\n'
 LIQUID = """.options fluid=water
 P1 pump 3bar
 orifice O1 pump act 0.5mm
