@@ -1,4 +1,4 @@
-"""Gas line with its own volume: ``tube`` (issue 12), N lumped segments.
+"""Line with its own volume: ``tube`` (issue 12), N lumped segments, gas or liquid.
 
 A tube of length L and inner diameter D becomes N segment elements in series
 (``NAME.s1`` … ``NAME.sN``, junction nodes ``NAME.1`` … ``NAME.N-1``).  Each segment
@@ -10,7 +10,13 @@ Flow law of a segment (isothermal ideal gas, Δ = p_a² − p_b², kPa²):
 * with ``f`` given: eq. 6 (Weymouth, Fanning f), Δ = R²·ṁ², R as ``pipe``;
 * without: laminar Hagen–Poiseuille, ṁ_lam = π·D⁴·Δ/(256·μ·R_s·T·L), blended with
   turbulent Blasius flow (Fanning f = 0.0791·Re^(−1/4), Re = 4ṁ/(π·D·μ)),
-  ṁ_turb = (Δ/B)^(4/7), by the smooth minimum ṁ = (ṁ_lam^(−4) + ṁ_turb^(−4))^(−1/4).
+  ṁ_turb = (Δ/B)^(4/7), by the smooth minimum ṁ = (ṁ_lam^(−4) + ṁ_turb^(−4))^(−1/4);
+* with ``roughness`` ε given: the same blend with Haaland's friction factor for the
+  turbulent flow (:mod:`pneunet.elements.friction`).
+
+In a liquid circuit a segment stores ρ·V/K at each end (as a ``volume``), Δ = p_a − p_b,
+and the law is Darcy–Weisbach: laminar Hagen–Poiseuille blended with Haaland (ε = 0 when
+not given; :mod:`pneunet.elements.friction`), or with ``f``: Δp = 4f·8L·ṁ²/(π²·D⁵·ρ).
 """
 from __future__ import annotations
 
@@ -18,8 +24,9 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..gas import GAS_CONSTANT
-from ..laws import quadrature_flow
+from ..laws import signed_root
 from . import register
+from .friction import line_flow
 from .base import ElementFamily, ElementSpec, Param
 from .resistors import check_line, pipe_resistance
 
@@ -28,6 +35,7 @@ SUTHERLAND = {"air": (1.716e-5, 273.15, 110.4), "nitrogen": (1.663e-5, 273.15, 1
 BLEND = 4.0            # exponent of the smooth minimum of laminar and turbulent flow
 BLASIUS = 0.0791       # Fanning f = BLASIUS·Re^(−1/4)
 MAX_SEGMENTS = 20
+MAX_RELATIVE_ROUGHNESS = 0.05  # Haaland's range: ε/D ≤ 0.05
 DIAMETERS_PER_SEGMENT = 100.0
 
 
@@ -68,12 +76,13 @@ def blended_flow(delta, a, b, partials=True):
 
 @register
 class Tube(ElementFamily):
-    """Gas line with resistance and volume, expanded into N lumped segments."""
+    """Gas or liquid line with resistance and volume, expanded into N lumped segments."""
 
     kind = "tube"
-    description = "gas line with its own volume: N segments of resistance and volume"
+    description = "line with its own volume (gas or liquid): N segments of resistance and volume"
     ports = ("a", "b")
     storage_ports = (0, 1)
+    fluids = ("gas", "liquid")
     params = {
         "length": Param("length", "tube length, mm", low=0.0, low_inclusive=False,
                         typical=(10.0, 1e5), plausible=(1.0, 1e6)),
@@ -83,14 +92,23 @@ class Tube(ElementFamily):
                           low=1.0, high=1000.0, default=np.nan),
         "f": Param("dimensionless", "Fanning friction factor (default: laminar/Blasius)",
                    low=0.0, high=1.0, low_inclusive=False, default=np.nan),
+        "roughness": Param("length", "wall roughness ε, mm (turbulent flow by Haaland; "
+                           "default: a smooth wall)", low=0.0, default=np.nan),
     }
 
     @classmethod
     def check_spec(cls, spec):
         check_line(spec)
-        n = spec.params["segments"]
+        p = spec.params
+        n = p["segments"]
         if not np.isnan(n) and n != int(n):
             raise ParameterError(f"segments={n:g} must be a whole number", where=spec.where)
+        if p["roughness"] > MAX_RELATIVE_ROUGHNESS * p["diameter"]:
+            raise ParameterError(
+                f"roughness={p['roughness']:g} mm is over {MAX_RELATIVE_ROUGHNESS:.0%} of the "
+                f"bore {p['diameter']:g} mm", where=spec.where,
+                hint="Haaland's friction factor covers ε/D ≤ 0.05; check the unit (e.g. "
+                     "roughness=0.0015mm for drawn tubing)")
 
     @classmethod
     def expand(cls, spec):
@@ -107,30 +125,59 @@ class Tube(ElementFamily):
 
     def __init__(self, specs, context):
         super().__init__(specs, context)
-        opts, gas = context.options, context.gas
+        opts, gas, liquid = context.options, context.gas, context.options.liquid
         length, diameter, self._f = self.column("length"), self.column("diameter"), self.column("f")
-        self._half_c = gas.capacitance(np.pi / 8 * diameter ** 2 * length * 1e-3, opts.temperature)
+        roughness = self.column("roughness")
+        half_volume = np.pi / 8 * diameter ** 2 * length * 1e-3  # mL
         self._explicit = ~np.isnan(self._f)
-        # eq. 6 where f is given (a placeholder f = 1 elsewhere: np.where drops it)
-        self._r = pipe_resistance(length, diameter, np.where(self._explicit, self._f, 1.0),
-                                  opts.temperature, gas.molar_mass_g_mol)
-        if gas.name not in SUTHERLAND and not self._explicit.all():
-            raise ParameterError(f"tube: no viscosity known for gas {gas.name!r}",
-                                 where=specs[0].where, hint="give f= for eq. 6")
-        mu = viscosity(gas.name, opts.temperature) if gas.name in SUTHERLAND else np.nan
-        self._a, self._b = laminar_turbulent_coefficients(length, diameter, opts.temperature,
-                                                          gas.molar_mass_g_mol, mu)
+        self._liquid = liquid is not None
+        # Haaland where ε is given or the fluid is a liquid (not where f is given)
+        self._haaland = ~self._explicit & (self._liquid | ~np.isnan(roughness))
+        f_or_1 = np.where(self._explicit, self._f, 1.0)  # a placeholder f: np.where drops it
+        length_m, diameter_m = length * 1e-3, diameter * 1e-3
+        if self._liquid:
+            self._half_c = liquid.density * half_volume / liquid.bulk_modulus
+            mu = liquid.viscosity
+            self._kappa = 8.0 * length_m / (np.pi ** 2 * diameter_m ** 5 * liquid.density)
+            self._to_si, self._band = 1e3, opts.flow_band / (2.0 * opts.ambient)  # kPa → Pa
+            # Δp = 4f·κ·ṁ² (SI) → Δp[kPa] = R²·ṁ[mg/s]², R = √(4f·κ·1e-15)
+            self._r = np.sqrt(4.0 * f_or_1 * self._kappa * 1e-15)
+        else:
+            self._half_c = gas.capacitance(half_volume, opts.temperature)
+            self._r = pipe_resistance(length, diameter, f_or_1, opts.temperature,
+                                      gas.molar_mass_g_mol)
+            if gas.name not in SUTHERLAND and not self._explicit.all():
+                raise ParameterError(f"tube: no viscosity known for gas {gas.name!r}",
+                                     where=specs[0].where, hint="give f= for eq. 6")
+            mu = viscosity(gas.name, opts.temperature) if gas.name in SUTHERLAND else np.nan
+            self._a, self._b = laminar_turbulent_coefficients(length, diameter, opts.temperature,
+                                                              gas.molar_mass_g_mol, mu)
+            rs_t = GAS_CONSTANT * opts.temperature / (gas.molar_mass_g_mol * 1e-3)
+            self._kappa = 16.0 * length_m * rs_t / (np.pi ** 2 * diameter_m ** 5)
+            self._to_si, self._band = 1e6, opts.flow_band  # kPa² → Pa²
+        mu = np.nan_to_num(mu, nan=1.8e-5)  # a placeholder where f is given
+        self._line = (16.0 * np.pi * diameter_m * mu * self._kappa, self._kappa, diameter_m,
+                      mu, np.nan_to_num(roughness) / diameter)
 
     def _through(self, p_a, p_b, partials):
         """Segment flow a→b (mg/s) and its partials in p_a, p_b."""
-        m_q, da_q, db_q = quadrature_flow(p_a, p_b, self._r, self.context.options.flow_band,
-                                          partials)
-        m_l, slope = blended_flow(p_a * p_a - p_b * p_b, self._a, self._b, partials)
-        mdot = np.where(self._explicit, m_q, m_l)
+        if self._liquid:
+            delta, dd_a, dd_b = p_a - p_b, 1.0, -1.0
+        else:
+            delta, dd_a, dd_b = p_a * p_a - p_b * p_b, 2.0 * p_a, -2.0 * p_b
+        root, slope = signed_root(delta, self._band, derivative=partials)
+        mdot, slope = root / self._r, (slope / self._r if partials else None)
+        if not self._liquid and not (self._explicit | self._haaland).all():
+            m_b, s_b = blended_flow(delta, self._a, self._b, partials)
+            mdot = np.where(self._explicit | self._haaland, mdot, m_b)
+            slope = np.where(self._explicit | self._haaland, slope, s_b) if partials else None
+        if self._haaland.any():
+            m_h, s_h = line_flow(delta * self._to_si, *self._line, partials=partials)
+            mdot = np.where(self._haaland, m_h * 1e6, mdot)
+            slope = np.where(self._haaland, s_h * 1e6 * self._to_si, slope) if partials else None
         if not partials:
             return mdot, None, None
-        return (mdot, np.where(self._explicit, da_q, 2.0 * p_a * slope),
-                np.where(self._explicit, db_q, -2.0 * p_b * slope))
+        return mdot, slope * dd_a, slope * dd_b
 
     def outflows(self, t, p, pdot):
         mdot, d_a, d_b = self._through(p[:, 0], p[:, 1], True)

@@ -184,12 +184,13 @@ class Circuit:
         """Tube resistor from length and diameter (mm) and Fanning friction factor."""
         return self.add("pipe", name, (a, b), length=length, diameter=diameter, f=f, **kw)
 
-    def tube(self, name, a, b, length, diameter, segments=None, f=None, **kw):
-        """Gas line with its own volume: ``length`` and inner ``diameter`` (mm) in
+    def tube(self, name, a, b, length, diameter, segments=None, f=None, roughness=None, **kw):
+        """Gas or liquid line with its own volume: ``length`` and inner ``diameter`` (mm) in
         ``segments`` lumped segments (default from L/D); Fanning ``f`` (default: laminar
-        below turbulent Blasius flow)."""
+        blended with turbulent flow: Blasius, or Haaland with wall ``roughness`` in mm and
+        in a liquid circuit)."""
         return self.add("tube", name, (a, b), length=length, diameter=diameter,
-                        segments=segments, f=f, **kw)
+                        segments=segments, f=f, roughness=roughness, **kw)
 
     def volume(self, name, node, V, n=None, p0=None, **kw):
         """Rigid volume ``V`` (mL), polytropic exponent ``n``, initial pressure ``p0``."""

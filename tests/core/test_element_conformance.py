@@ -171,9 +171,21 @@ def _tube():
     c.tube("T1", "a", "m", length=500.0, diameter=2.0, segments=3, f=0.008)
     c.tube("T2", "m", "atm", length=500.0, diameter=2.0, segments=3, f=0.008)
     c.tube("T3", "a", "d", length=2000.0, diameter=1.0, segments=2)  # laminar/Blasius, dead end
-    # equal halves in quadrature (eq. 5); the dead end at the source pressure
-    return c, {"m": np.sqrt((400.0 ** 2 + 100.0 ** 2) / 2), "d": 400.0, "T3.1": 400.0}, dict(
-        kind="tube", nodes=("a", "b"), length=10.0, diameter=2.0, segments=1.5)
+    c.tube("T4", "a", "e", length=900.0, diameter=3.0, roughness=0.01)  # Haaland, dead end
+    # equal halves in quadrature (eq. 5); the dead ends at the source pressure
+    return c, {"m": np.sqrt((400.0 ** 2 + 100.0 ** 2) / 2), "d": 400.0, "T3.1": 400.0,
+               "e": 400.0}, dict(kind="tube", nodes=("a", "b"), length=10.0, diameter=2.0,
+                                 segments=1.5)
+
+
+def _liquid_tube():
+    c = Circuit("liquid tube", ambient=100.0, fluid="water")
+    c.pressure_source("P1", "a", 400.0)
+    c.tube("T1", "a", "m", length=300.0, diameter=1.0, roughness=0.02, segments=2)
+    c.tube("T2", "m", "atm", length=300.0, diameter=1.0, roughness=0.02, segments=2)
+    c.tube("T3", "a", "d", length=500.0, diameter=2.0, f=0.01)  # eq. 6's f, dead end
+    # equal tubes: equal drops; the dead end at the source pressure
+    return c, {"m": 250.0, "d": 400.0}, None
 
 
 def _mckibben():
@@ -198,6 +210,7 @@ CASES = {"pressure_source": _pressure_source, "flow_source": _flow_source,
          "check_valve": _check_valve, "accumulator": _accumulator, "pv_volume": _pv_volume,
          "orifice": _orifice, "laminar_tube": _laminar_tube,
          "hysteretic_check_valve": _hysteretic_check_valve, "tube": _tube,
+         "tube_liquid": _liquid_tube,
          "mckibben": _mckibben, "mckibben_static": _mckibben, "mckibben_damped": _mckibben,
          "mckibben_inertial": _mckibben}
 
