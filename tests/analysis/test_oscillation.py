@@ -21,10 +21,15 @@ def test_decaying_and_equilibrium():
 
 
 def test_oscillator_period_matches_the_verified_cycle(paper_cycle):
+    """Period and extremes against the paper's equations integrated by scipy
+    (tests/reference_oscillator.py: 5.9399 s, 183.46–319.78 kPa)."""
+    from reference_oscillator import limit_cycle  # tests/ is on pytest's sys.path
+
+    period, p_min, p_max = limit_cycle()
     o = paper_cycle.oscillation
     assert o.kind == "limit_cycle" and o.converged
-    assert abs(o.period_s - 5.9405) < 2e-3
-    assert abs(o.p_min - 183.45) < 0.05 and abs(o.p_max - 319.79) < 0.05
+    assert abs(o.period_s - period) < 2e-3
+    assert abs(o.p_min - p_min) < 0.05 and abs(o.p_max - p_max) < 0.05
     # it stopped as soon as the cycle converged instead of running a fixed long time
     assert paper_cycle.t_simulated <= 45
     assert 0 < o.rise_fraction < o.duty_cycle < 1
