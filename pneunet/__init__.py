@@ -29,6 +29,8 @@ _LAZY = {
     "DataError": "pneunet.errors",
     "SolverError": "pneunet.errors",
     "AIR": "pneunet.gas",
+    "Gas": "pneunet.gas",
+    "Liquid": "pneunet.liquids",
 }
 
 __all__ = sorted(_LAZY) + ["__version__"]

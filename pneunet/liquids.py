@@ -8,6 +8,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from .gas import check_fluid
+
 
 @dataclass(frozen=True)
 class Liquid:
@@ -17,6 +19,10 @@ class Liquid:
     density: float        # mg/mL = kg/m³
     viscosity: float      # Pa·s
     bulk_modulus: float   # kPa
+
+    def __post_init__(self):
+        check_fluid(self.name, "liquid", rho=self.density, mu=self.viscosity,
+                    K=self.bulk_modulus)
 
     @property
     def normal_density_mg_ml(self) -> float:

@@ -41,6 +41,9 @@ SLOTS = {
     "stiffness": "N/m",
     "damping": "N*s/m",
     "angle": "deg",
+    "density": "kg/m^3",     # = mg/mL (a user fluid: .fluid)
+    "viscosity": "Pa*s",
+    "molar_mass": "g/mol",
 }
 
 #: common units converted without loading pint (its registry takes ~0.5 s to build):
@@ -60,7 +63,17 @@ FAST_FACTORS = {
     ("mL/kPa", "compliance"): 1.0, ("mL/bar", "compliance"): 0.01,
     ("kg", "mass"): 1.0, ("g", "mass"): 1e-3, ("N", "force"): 1.0, ("N/m", "stiffness"): 1.0,
     ("N/mm", "stiffness"): 1e3, ("N*s/m", "damping"): 1.0, ("deg", "angle"): 1.0,
+    ("kg/m^3", "density"): 1.0, ("g/mL", "density"): 1e3, ("Pa*s", "viscosity"): 1.0,
+    ("mPa*s", "viscosity"): 1e-3, ("g/mol", "molar_mass"): 1.0,
 }
+
+#: a unit's power written without ^ (``kg/m3``, ``cm3``): pint needs ``m^3``
+_BARE_POWER = re.compile(r"(?<=[A-Za-z])([23])(?![\w^.])")
+
+
+def pint_unit(unit: str) -> str:
+    """``unit`` as pint reads it: ``kg/m3`` → ``kg/m^3`` (a digit after a unit's letters)."""
+    return _BARE_POWER.sub(r"^\1", unit)
 
 GAUGE_UNITS = ("kPag", "barg", "psig", "Pag", "MPag", "mbarg", "hPag", "atmg")
 _QUANTITY = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(.*?)\s*$")
@@ -127,7 +140,7 @@ def _convert(value, unit, target, slot, gas, name):
 
     ureg = registry()
     try:
-        q = ureg.Quantity(value, unit)
+        q = ureg.Quantity(value, pint_unit(unit))
     except Exception as exc:  # noqa: BLE001 - pint's parser raises many kinds on bad text
         # (UndefinedUnitError, ValueError, tokenize.TokenError for an unclosed '(' ...)
         raise ParameterError(f"{name}: unknown unit {unit!r}",
@@ -170,6 +183,9 @@ _EXAMPLES = {
     "stiffness": "500N/m or 0.5N/mm",
     "damping": "20N*s/m",
     "angle": "25deg",
+    "density": "1260kg/m3 or 1.26g/mL",
+    "viscosity": "1.41Pa*s or 1mPa*s",
+    "molar_mass": "28.97g/mol",
 }
 
 

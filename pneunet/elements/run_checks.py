@@ -29,8 +29,8 @@ def laminar_reynolds(specs, t, re) -> None:
         warnings.warn(RangeWarning(
             f"{specs[k].where}: Reynolds number {re[i, k]:.4g} at t = {t[i]:.4g} s (up to "
             f"{re[:, k].max():.4g}): the flow is not laminar (Re < {RE_LAMINAR:g}), so the "
-            "laminar law gives too much flow from then on; a longer or narrower tube keeps "
-            "it laminar, and a turbulent loss is an orifice with Cd = 1/√K"), stacklevel=3)
+            "laminar law gives too much flow from then on; a tube (Darcy–Weisbach, any Re) "
+            "holds there, and a turbulent loss is an orifice with Cd = 1/√K"), stacklevel=3)
 
 
 def check_valve_shut(specs, t, dp, opening, pcrack) -> None:

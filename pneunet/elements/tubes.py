@@ -30,19 +30,11 @@ from .friction import line_flow
 from .base import ElementFamily, ElementSpec, Param
 from .resistors import check_line, pipe_resistance
 
-#: Sutherland viscosity μ = μ0·(T/T0)^1.5·(T0 + S)/(T + S): (μ0 Pa·s, T0 K, S K)
-SUTHERLAND = {"air": (1.716e-5, 273.15, 110.4), "nitrogen": (1.663e-5, 273.15, 106.7)}
 BLEND = 4.0            # exponent of the smooth minimum of laminar and turbulent flow
 BLASIUS = 0.0791       # Fanning f = BLASIUS·Re^(−1/4)
 MAX_SEGMENTS = 20
 MAX_RELATIVE_ROUGHNESS = 0.05  # Haaland's range: ε/D ≤ 0.05
 DIAMETERS_PER_SEGMENT = 100.0
-
-
-def viscosity(gas_name: str, temperature_k):
-    """Dynamic viscosity of the gas (Sutherland), Pa·s."""
-    mu0, t0, s = SUTHERLAND[gas_name]
-    return mu0 * (temperature_k / t0) ** 1.5 * (t0 + s) / (temperature_k + s)
 
 
 def default_segments(length_mm: float, diameter_mm: float) -> int:
@@ -146,10 +138,11 @@ class Tube(ElementFamily):
             self._half_c = gas.capacitance(half_volume, opts.temperature)
             self._r = pipe_resistance(length, diameter, f_or_1, opts.temperature,
                                       gas.molar_mass_g_mol)
-            if gas.name not in SUTHERLAND and not self._explicit.all():
+            mu = gas.viscosity(opts.temperature)
+            if np.isnan(mu) and not self._explicit.all():
                 raise ParameterError(f"tube: no viscosity known for gas {gas.name!r}",
-                                     where=specs[0].where, hint="give f= for eq. 6")
-            mu = viscosity(gas.name, opts.temperature) if gas.name in SUTHERLAND else np.nan
+                                     where=specs[0].where,
+                                     hint="give f= for eq. 6, or the gas's mu (.fluid)")
             self._a, self._b = laminar_turbulent_coefficients(length, diameter, opts.temperature,
                                                               gas.molar_mass_g_mol, mu)
             rs_t = GAS_CONSTANT * opts.temperature / (gas.molar_mass_g_mol * 1e-3)

@@ -19,7 +19,9 @@ from . import plausible
 from .arrays import split_range
 from .datafiles import inline_table, read_data_file
 from .deck import Deck, Op
+from ..engine.options import SimulationOptions
 from .expr import Scope, evaluate
+from .fluid_cards import read_fluid_cards
 from .includes import KEYWORDS as INCLUDE_KEYWORDS
 from .located import did_you_mean as _close, error_at as _err
 from .measures import MeasureStatements
@@ -33,7 +35,7 @@ from .values import (SCALE, check_number, convert, convert_magnitude, dimension_
 
 REFERENCE = ("0", "gnd", "atm")
 DIRECTIVES = (".param", ".subckt", ".ends", *INCLUDE_KEYWORDS, ".model", ".ic", ".options",
-              ".option", ".tran", ".op", ".dc", ".step", ".meas", ".measure", ".save", ".print",
+              ".option", ".fluid", ".tran", ".op", ".dc", ".step", ".meas", ".measure", ".save", ".print",
               ".title", ".end")
 
 #: .options name -> (SimulationOptions field, slot)
@@ -76,7 +78,11 @@ class _Builder(ModelCards, AnalysisStatements, MeasureStatements, WaveformCalls)
             if st.is_directive and st.keyword not in DIRECTIVES:
                 raise _err(f"unknown directive {st.head!r}", st.items[0],
                            _close(st.keyword, DIRECTIVES))
-        self.options = self._options([st for st in top if st.keyword in (".options", ".option")])
+        fluids = read_fluid_cards([st for st in top if st.keyword == ".fluid"],
+                                  lambda word, slot, key: self._number(
+                                      word, slot, key, Scope(), SimulationOptions()))
+        self.options = self._options([st for st in top if st.keyword in (".options", ".option")],
+                                     fluids)
         set_expression_ambient(self.options.ambient)
         self._check_overrides()
         self.scope = Scope(dict(self.overrides))
@@ -150,10 +156,8 @@ class _Builder(ModelCards, AnalysisStatements, MeasureStatements, WaveformCalls)
                 raise NetlistError(f"parameter {name} = {value}: not a finite number",
                                    where=self.source.file)
 
-    def _options(self, statements):
-        from ..engine.options import SimulationOptions
-
-        values, opts = {}, SimulationOptions()
+    def _options(self, statements, fluids=()):
+        values, opts = ({"fluids": fluids} if fluids else {}), SimulationOptions()
         for st in statements:
             for it in st.items[1:]:
                 if not isinstance(it, Pair) or not isinstance(it.key, Word):
@@ -176,8 +180,9 @@ class _Builder(ModelCards, AnalysisStatements, MeasureStatements, WaveformCalls)
                 plausible.check_option(key, values[field_name], it.value)
         try:
             return opts.replace(**values)
-        except PneunetError as err:
-            raise _err(err.message, statements[-1].span, err.hint) from None
+        except PneunetError as err:  # no .options line: a .fluid card's fault
+            where = statements[-1].span if statements else self.source.top[0].span
+            raise _err(err.message, where, err.hint) from None
 
     def _param(self, st, scope, fixed=()):
         if len(st.items) < 2:

@@ -56,6 +56,19 @@ def _letter(kind: str) -> str | None:
     return letters[0].lower() if letters else None
 
 
+def _fluid_card(fluid) -> str:
+    """The ``.fluid`` line of a user's liquid or gas (pneunet.netlist.fluid_cards)."""
+    if hasattr(fluid, "bulk_modulus"):
+        return (f".fluid {fluid.name} rho={_num(fluid.density)}kg/m^3 "
+                f"mu={_num(fluid.viscosity)}Pa*s K={_num(fluid.bulk_modulus)}kPa")
+    card = f".fluid {fluid.name} M={_num(fluid.molar_mass_g_mol)}g/mol"
+    if not math.isnan(fluid.mu0):
+        card += f" mu={_num(fluid.mu0)}Pa*s T0={_num(fluid.t0)}K"
+    if not math.isnan(fluid.sutherland):
+        card += f" S={_num(fluid.sutherland)}K"
+    return card
+
+
 def print_circuit(circuit, *, header: bool = True) -> str:
     """Netlist text (options, models, elements, .ic) for ``circuit``."""
     lines = []
@@ -64,10 +77,11 @@ def print_circuit(circuit, *, header: bool = True) -> str:
         lines += [f"* {printable(t)}" for t in circuit.title.splitlines()] or \
             ["* pneunet circuit"]
     defaults = SimulationOptions()
+    lines += [_fluid_card(fluid) for fluid in circuit.options.fluids]
     opts = [f"{f.name}={getattr(circuit.options, f.name)}" if f.name in ("gas", "fluid") else
             f"{f.name}={_num(getattr(circuit.options, f.name))}"
-            for f in fields(circuit.options)
-            if not _same(getattr(circuit.options, f.name), getattr(defaults, f.name))]
+            for f in fields(circuit.options) if f.name != "fluids"
+            and not _same(getattr(circuit.options, f.name), getattr(defaults, f.name))]
     if opts:
         lines.append(".options " + " ".join(opts))
     models: dict[int, str] = {}

@@ -80,7 +80,7 @@ def load(src: SourceText, policy: IncludePolicy | None = None,
             continue
         if stack:
             if kw in (".tran", ".op", ".dc", ".step", ".meas", ".measure", ".options", ".option",
-                      ".save", ".print"):
+                      ".fluid", ".save", ".print"):
                 raise _err(f"{st.head} is not allowed inside .subckt {stack[-1].name}", st.span,
                            "put analyses and options at the top level")
             stack[-1].body.append(st)

@@ -73,11 +73,11 @@ def _unit_dimension_matches(unit: str, slot: str) -> bool:
 
 def pint_dimension_matches(unit: str, slot: str) -> bool:
     """What pint says: is ``unit`` a unit whose dimension fits ``slot``?"""
-    from ..units import SLOTS, registry
+    from ..units import SLOTS, pint_unit, registry
 
     try:
         ureg = registry()
-        q = ureg.Quantity(1.0, unit)
+        q = ureg.Quantity(1.0, pint_unit(unit))
         target = SLOTS[slot]
         if slot == "flow" and q.check("[volume]/[time]"):
             return True
