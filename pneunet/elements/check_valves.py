@@ -9,7 +9,8 @@ and the flow is the quadrature law (eq. 4) through the open fraction plus a leak
     ṁ = (u/R + 1/Rleak) · sr(p_a² − p_b²)       [mg/s, a→b; negative is back-flow]
 
 sr is the regularised signed root of :func:`pneunet.laws.signed_root` (band ``flow_band``).
-The leak passes both ways (no leak when Rleak is not given).  ``check_valve`` reseats where
+The leak passes both ways (no leak when Rleak is not given).  In a liquid circuit the
+law is linear, ṁ = (u/R + 1/Rleak)·(p_a − p_b): R is the open valve's Δp/ṁ (kPa·s/mg).  ``check_valve`` reseats where
 it cracks; ``hysteretic_check_valve`` reseats at a lower pressure, its open fraction a state.
 """
 from __future__ import annotations
@@ -39,6 +40,7 @@ class CheckValve(ElementFamily):
     aliases = ("D",)
     description = "check valve a→b: cracking pressure, C¹ opening over width, closed leak"
     ports = ("a", "b")
+    fluids = ("gas", "liquid")
     params = {
         "R": Param("resistance", "resistance when fully open, kPa·s/mg", low=0.0,
                    low_inclusive=False),
@@ -63,12 +65,18 @@ class CheckValve(ElementFamily):
         self._g_open = 1.0 / self.column("R")
         self._g_leak = 1.0 / self.column("Rleak")
         self._pcrack, self._width = self.column("pcrack"), self.column("width")
+        self._liquid = context.options.liquid is not None
 
     def _quadrature(self, p_a, p_b, opening, partials):
-        """ṁ = (u/R + 1/Rleak)·sr(p_a² − p_b²), sr, and ∂ṁ/∂p_a, ∂ṁ/∂p_b at fixed u."""
+        """ṁ = (u/R + 1/Rleak)·sr(p_a² − p_b²) (a liquid: ·(p_a − p_b)), that driving term,
+        and ∂ṁ/∂p_a, ∂ṁ/∂p_b at fixed u."""
+        g = opening * self._g_open + self._g_leak
+        if self._liquid:
+            drive = p_a - p_b
+            return g * drive, drive, (g + 0.0 * drive if partials else None), \
+                (-g + 0.0 * drive if partials else None)
         root, slope = signed_root(p_a * p_a - p_b * p_b, self.context.options.flow_band,
                                   derivative=partials)
-        g = opening * self._g_open + self._g_leak
         if not partials:
             return g * root, root, None, None
         return g * root, root, 2.0 * g * slope * p_a, -2.0 * g * slope * p_b

@@ -2,7 +2,8 @@
 
 With the liquid's density ρ (mg/mL = kg/m³) and viscosity μ (Pa·s), Δp = p_a − p_b (kPa):
 
-* ``orifice``: ṁ = Cd·A·√(2ρ·Δp), A = π·d²/4 — turbulent, ∝ √Δp;
+* ``orifice``: ṁ = Cd·A·√(2ρ·Δp), A = π·d²/4 — turbulent, ∝ √Δp (a minor-loss factor K,
+  Δp = K·ρv²/2: Cd = 1/√K);
   in mg/s with A in mm² and Δp in kPa: ṁ = Cd·A·√(2000·ρ·Δp);
 * ``laminar_tube``: Hagen–Poiseuille ṁ = ρ·π·D⁴·Δp/(128·μ·L) — ∝ Δp (valid while the
   Reynolds number 4ṁ/(π·D·μ) stays below ~2000; signal ``Re_<name>``);
@@ -25,6 +26,7 @@ from . import run_checks
 from .resistors import check_line
 
 _OUT_IN = np.array([1.0, -1.0])  # a flow a→b leaves node a and enters node b
+CD_SHARP = 0.61  # discharge coefficient of a sharp-edged orifice
 
 
 class _LiquidLaw(ElementFamily, ABC):
@@ -68,13 +70,24 @@ class Orifice(_LiquidLaw):
                           typical=(0.05, 50.0), plausible=(0.005, 500.0)),
         "Cd": Param("dimensionless", "discharge coefficient (0.61 sharp-edged; 1/√K for a "
                     "minor-loss factor K)", low=0.0, high=2.0, low_inclusive=False,
-                    default=0.61),
+                    default=CD_SHARP),
+        "K": Param("dimensionless", "minor-loss factor K, Δp = K·ρv²/2 with v in the bore "
+                   "(FONSim's FlowRestrictor): Cd = 1/√K (default: Cd)", low=0.25,
+                   high=1e6, default=np.nan),
     }
+
+    @classmethod
+    def check_spec(cls, spec):
+        if not np.isnan(spec.params["K"]) and spec.params["Cd"] != CD_SHARP:
+            raise ParameterError("give the orifice's Cd or its K, not both", where=spec.where,
+                                 hint="Cd = 1/√K")
 
     def __init__(self, specs, context):
         super().__init__(specs, context)
         area = np.pi / 4 * self.column("diameter") ** 2  # mm²
-        self._k = self.column("Cd") * area * np.sqrt(2000.0 * self.liquid.density)
+        k_factor = self.column("K")
+        cd = np.where(np.isnan(k_factor), self.column("Cd"), 1.0 / np.sqrt(k_factor))
+        self._k = cd * area * np.sqrt(2000.0 * self.liquid.density)
         self._band = context.options.flow_band / (2.0 * context.options.ambient)
 
     def law(self, dp, partials):

@@ -228,9 +228,10 @@ class Circuit:
         (columns ``p_<unit>,V_<unit>``), interpolated by a monotone cubic (PCHIP)."""
         return self.add("pv_volume", name, (node,), table=table, p0=p0, **kw)
 
-    def orifice(self, name, a, b, diameter, Cd=None, **kw):
-        """Liquid orifice of ``diameter`` (mm), discharge coefficient ``Cd`` (default 0.61)."""
-        return self.add("orifice", name, (a, b), diameter=diameter, Cd=Cd, **kw)
+    def orifice(self, name, a, b, diameter, Cd=None, K=None, **kw):
+        """Liquid orifice of ``diameter`` (mm), discharge coefficient ``Cd`` (default 0.61)
+        or minor-loss factor ``K`` (Cd = 1/√K)."""
+        return self.add("orifice", name, (a, b), diameter=diameter, Cd=Cd, K=K, **kw)
 
     def laminar_tube(self, name, a, b, length, diameter, **kw):
         """Liquid tube in laminar flow: ``length`` and inner ``diameter`` in mm."""

@@ -178,6 +178,17 @@ def _tube():
                                  segments=1.5)
 
 
+def _liquid_check_valve():
+    c = Circuit("liquid check valve", ambient=100.0, fluid="water")
+    c.pressure_source("P1", "a", 400.0)
+    c.check_valve("D1", "a", "m", R=0.01, pcrack=5.0, width=300.0, Rleak=0.1)  # opening
+    c.accumulator("A1", "m", V0=5.0, k=0.01)
+    c.hysteretic_check_valve("D2", "a", "d", "z", R=0.01, pcrack=5.0, preseat=2.0)
+    c.volume("V2", "d", V=5.0)
+    # no outlet: both fill to the supply pressure (the leak passes the last pcrack)
+    return c, {"m": 400.0}, None
+
+
 def _liquid_tube():
     c = Circuit("liquid tube", ambient=100.0, fluid="water")
     c.pressure_source("P1", "a", 400.0)
@@ -210,7 +221,7 @@ CASES = {"pressure_source": _pressure_source, "flow_source": _flow_source,
          "check_valve": _check_valve, "accumulator": _accumulator, "pv_volume": _pv_volume,
          "orifice": _orifice, "laminar_tube": _laminar_tube,
          "hysteretic_check_valve": _hysteretic_check_valve, "tube": _tube,
-         "tube_liquid": _liquid_tube,
+         "tube_liquid": _liquid_tube, "check_valve_liquid": _liquid_check_valve,
          "mckibben": _mckibben, "mckibben_static": _mckibben, "mckibben_damped": _mckibben,
          "mckibben_inertial": _mckibben}
 
