@@ -34,15 +34,16 @@ MODULES = {
     "intervals": ("pneunet/truth/intervals.py",
                   "tests/diagnose/test_interval_coverage.py"),
     "laws": ("pneunet/laws.py",
-             "tests/core/test_valve_law_reference.py tests/core/test_scalar_laws.py "
-             "tests/core/test_element_conformance.py"),
+             "tests/core/test_law_partials.py tests/core/test_valve_law_reference.py "
+             "tests/core/test_scalar_laws.py tests/core/test_element_conformance.py"),
     "noise": ("pneunet/truth/noise.py", "tests/diagnose tests/traces -k noise"),
     "includes": ("pneunet/netlist/includes.py", "tests/netlist/test_includes.py"),
     "assembly": ("pneunet/engine/assembly.py",
                  "tests/core/test_element_conformance.py tests/core/test_topology_and_errors.py"),
     "valves": ("pneunet/elements/valves.py",
                "tests/core/test_valve_law_reference.py tests/core/test_scalar_laws.py "
-               "tests/core/test_element_conformance.py -k valve"),
+               "tests/core/test_element_conformance.py tests/core/test_law_partials.py "
+               "-k valve"),
 }
 DEFAULT = ("verdict", "intervals", "laws")
 EXCLUDED = [r"core/ReplaceBinaryOperator_.*_(RShift|LShift|BitOr|BitAnd|BitXor|FloorDiv|Mod)$"]
