@@ -36,7 +36,9 @@ MODULES = {
     "laws": ("pneunet/laws.py",
              "tests/core/test_law_partials.py tests/core/test_valve_law_reference.py "
              "tests/core/test_scalar_laws.py tests/core/test_element_conformance.py"),
-    "noise": ("pneunet/truth/noise.py", "tests/diagnose tests/traces -k noise"),
+    "noise": ("pneunet/truth/noise.py",
+              "tests/diagnose/test_noise_floor.py tests/diagnose/test_logic.py"
+              "::test_noise_floor_estimate_follows_flow_dependent_noise"),
     "includes": ("pneunet/netlist/includes.py", "tests/netlist/test_includes.py"),
     "assembly": ("pneunet/engine/assembly.py",
                  "tests/core/test_element_conformance.py tests/core/test_topology_and_errors.py"),
