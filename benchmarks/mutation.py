@@ -32,6 +32,7 @@ MODULES = {
     "verdict": ("pneunet/truth/verdict.py",
                 "tests/diagnose/test_verdict_threshold.py"),
     "intervals": ("pneunet/truth/intervals.py",
+                  "tests/diagnose/test_interval_sandwich.py "
                   "tests/diagnose/test_interval_coverage.py"),
     "laws": ("pneunet/laws.py",
              "tests/core/test_law_partials.py tests/core/test_valve_law_reference.py "

@@ -1,0 +1,135 @@
+"""The truth core's autocorrelation gate and sandwich covariance (pneunet.truth.intervals)
+against their formulas: Ljung–Box as statsmodels computes it, the AR order and
+coefficients as statsmodels' ar_select_order/AutoReg give them, the covariance written out
+(issue 39; the coverage of the resulting intervals: test_interval_coverage.py)."""
+import numpy as np
+import pytest
+
+
+def test_ljung_box_p_is_statsmodels_acorr_ljungbox():
+    """The gate between white and sandwich intervals: the smallest p-value over the
+    signals equals statsmodels' acorr_ljungbox (10 lags, each signal's mean removed)."""
+    from statsmodels.stats.diagnostic import acorr_ljungbox
+
+    from pneunet.truth.intervals import ljung_box_p
+
+    rng = np.random.default_rng(7)
+    parts = []
+    for rho in (0.0, 0.15, 0.3):
+        x = np.zeros(300)
+        w = rng.standard_normal(300)
+        for i in range(1, 300):
+            x[i] = rho * x[i - 1] + w[i]
+        parts.append(x + 5.0)
+    want = [float(acorr_ljungbox(x - x.mean(), lags=[10])["lb_pvalue"].iloc[0]) for x in parts]
+    assert ljung_box_p(parts[1]) == pytest.approx(want[1], rel=1e-9)
+    groups = np.repeat([2, 0, 1], 300)
+    assert ljung_box_p(np.concatenate(parts), groups) == pytest.approx(min(want), rel=1e-9)
+    assert np.isnan(ljung_box_p(parts[0][:30]))  # too short for 10 lags: no verdict
+
+
+
+def _ar_noise(rng, coeffs, n):
+    x, w = np.zeros(n), rng.standard_normal(n)
+    for i in range(n):
+        x[i] = w[i] + sum(a * x[i - j - 1] for j, a in enumerate(coeffs) if i > j)
+    return x
+
+
+def _whitened(J, r, a):
+    """(K, e) written out: eₜ = rₜ − Σ aⱼ rₜ₋ⱼ and Kₛ = Σᵤ hᵤ Jₛ₊ᵤ with h the AR filter's
+    impulse response, so that Σ Jₜ rₜ = Σ Kₛ eₛ."""
+    n = len(r)
+    e = np.array([r[t] - sum(a[j] * r[t - j - 1] for j in range(len(a)) if t > j)
+                  for t in range(n)])
+    h = np.zeros(n)
+    for u in range(n):
+        h[u] = 1.0 if u == 0 else sum(a[j] * h[u - j - 1] for j in range(len(a)) if u > j)
+    lag = np.subtract.outer(np.arange(n), np.arange(n))  # t − s at [s, t]: negative
+    K = np.where(lag <= 0, h[np.abs(lag)], 0.0) @ J
+    assert K.T @ e == pytest.approx(J.T @ r, rel=1e-9)  # the identity the estimator rests on
+    return K, e
+
+
+def _reference_sandwich(J, parts):
+    """(JᵀJ)⁻¹ Σ Kₛ Kₛᵀ eₛ² (JᵀJ)⁻¹ · n/(n − p) over the signals' (K, e)."""
+    n, p = J.shape
+    Hinv = np.linalg.inv(J.T @ J)
+    S = sum((K * e[:, None]).T @ (K * e[:, None]) for K, e in parts)
+    return Hinv @ S @ Hinv * n / (n - p)
+
+
+def test_sandwich_is_the_ar_prewhitened_formula():
+    """AR(2) residuals: the order and coefficients are statsmodels' (ar_select_order by
+    AIC over Schwert's 12·(n/100)^¼ = 15 lags, AutoReg on the same sample), the covariance
+    the formula written out, the details the residuals' own numbers."""
+    from statsmodels.tsa.ar_model import AutoReg, ar_select_order
+    from statsmodels.tsa.stattools import acf
+
+    from pneunet.truth.intervals import sandwich
+
+    rng = np.random.default_rng(3)
+    n = 300
+    t = np.linspace(0.0, 6.0, n)
+    J = np.column_stack([np.exp(-t / 2), t * np.exp(-t / 2), np.ones(n)])
+    r = _ar_noise(rng, [0.6, 0.25], n)
+    assert ar_select_order(r, maxlag=15, ic="aic", trend="n").ar_lags == [1, 2]
+    a = AutoReg(r, lags=2, trend="n", hold_back=15).fit().params
+    K, e = _whitened(J, r, a)
+    cov, info = sandwich(J, r)
+    np.testing.assert_allclose(cov, _reference_sandwich(J, [(K, e)]), rtol=1e-9)
+    assert info["ar_order"] == 2 and info["ar_sum"] == pytest.approx(a.sum(), rel=1e-12)
+    assert info["rho1"] == pytest.approx(acf(r, nlags=1)[1], rel=1e-12)
+    long_run = float(e @ e) / (1 - a.sum()) ** 2
+    assert info["dof_eff"] == pytest.approx(n * np.sum((r - r.mean()) ** 2) / long_run,
+                                            rel=1e-9)
+
+
+def test_sandwich_of_ar1_residuals_corrects_the_coefficients_bias():
+    """An AR(1) of least-squares residuals is biased low (Kendall: −(1+3ρ)/n after a
+    mean; −(p·(1+ρ) + 2ρ)/n after p smooth parameters): ρ̂ + that is used."""
+    from statsmodels.tsa.ar_model import AutoReg, ar_select_order
+
+    from pneunet.truth.intervals import sandwich
+
+    rng = np.random.default_rng(11)
+    n = 400
+    t = np.linspace(0.0, 6.0, n)
+    J = np.column_stack([np.exp(-t / 2), t * np.exp(-t / 2)])
+    r = _ar_noise(rng, [0.5], n)
+    kmax = int(12 * (n / 100) ** 0.25)
+    assert ar_select_order(r, maxlag=kmax, ic="aic", trend="n").ar_lags == [1]
+    rho = AutoReg(r, lags=1, trend="n", hold_back=kmax).fit().params[0]
+    a = np.array([rho + (2 * (1 + rho) + 2 * rho) / n])
+    cov, info = sandwich(J, r)
+    assert info["ar_order"] == 1 and info["ar_sum"] == pytest.approx(a[0], rel=1e-12)
+    np.testing.assert_allclose(cov, _reference_sandwich(J, [_whitened(J, r, a)]), rtol=1e-9)
+
+
+def test_sandwich_keeps_each_signal_to_itself():
+    """Two signals: one AR pooled over both (least squares on the stacked lags), no lag
+    crossing from one signal to the other, the rows' order between the signals
+    irrelevant; a random walk's AR is kept stationary (its roots inside |z| ≤ 0.99)."""
+    from pneunet.truth.intervals import _autoregression, sandwich
+
+    rng = np.random.default_rng(7)
+    n, kmax = 200, 14
+    t = np.linspace(0.0, 6.0, n)
+    J1 = np.column_stack([np.exp(-t / 2), t * np.exp(-t / 2)])
+    J2 = np.column_stack([0.5 * np.exp(-t / 2), np.zeros(n)])
+    r1, r2 = _ar_noise(rng, [0.5], n), _ar_noise(rng, [0.5], n)
+    J, r, groups = np.vstack([J1, J2]), np.concatenate([r1, r2]), np.repeat([0, 1], n)
+    cov, info = sandwich(J, r, groups)
+    assert info["ar_order"] == 1
+    lagged = np.concatenate([r1[kmax - 1:-1], r2[kmax - 1:-1]])
+    rho = float(lagged @ np.concatenate([r1[kmax:], r2[kmax:]]) / (lagged @ lagged))
+    a = np.array([rho + (2 * (1 + rho) + 2 * rho * 2) / (2 * n)])
+    assert info["ar_sum"] == pytest.approx(a[0], rel=1e-12)
+    want = _reference_sandwich(J, [_whitened(J1, r1, a), _whitened(J2, r2, a)])
+    np.testing.assert_allclose(cov, want, rtol=1e-9)
+    # the same rows interleaved (signal 0, 1, 0, 1, ...): the same covariance
+    order = np.argsort(np.r_[np.arange(n), np.arange(n)] * 2 + groups, kind="stable")
+    np.testing.assert_allclose(sandwich(J[order], r[order], groups[order])[0], cov,
+                               rtol=1e-12)
+    walk, k, _ = _autoregression([np.cumsum(rng.standard_normal(500))], 2)
+    assert k >= 1 and np.max(np.abs(np.roots(np.r_[1.0, -walk]))) <= 0.99 + 1e-12
