@@ -77,3 +77,17 @@ def test_quadrature_flow_and_signed_root_against_their_formulas(band):
         assert float(value) == pytest.approx(root(d, band), rel=1e-12)
         assert float(slope) == pytest.approx(central(lambda v: root(v, band), [d], 1e-6)[0],
                                              rel=1e-6)
+
+
+def test_default_flow_band_is_the_documented_10_kpa2():
+    """docs/netlist.md's .options line and docs/model.md: flow_band = 10 kPa² unless set;
+    the laws' default is the circuits' default."""
+    from pneunet.engine.options import SimulationOptions
+
+    assert SimulationOptions().flow_band == 10.0
+    mdot, _, _ = quadrature_flow(150.0, 149.99, 1.0)
+    assert float(mdot) == pytest.approx(root(150.0 ** 2 - 149.99 ** 2, 10.0), rel=1e-12)
+    axi = PAPER_VALVES["axi"].as_dict()
+    mdot, _ = valve_flow_and_partials(150.0, 149.99, 20.0, *axi.values())  # open: Δp 134.5
+    want = valve(150.0, 149.99, 20.0, axi, 10.0)
+    assert want > 0 and float(mdot) == pytest.approx(want, rel=1e-12)
