@@ -9,7 +9,8 @@ import itertools
 import numpy as np
 import pytest
 
-from pneunet.laws import Scalar, quadrature_flow, signed_root, valve_flow_and_partials
+from pneunet.laws import (Scalar, quadrature_flow, signed_root, valve_conductance,
+                          valve_flow_and_partials)
 from pneunet.valve_params import PAPER_VALVES
 import reference_valve as ref  # tests/ is on pytest's sys.path
 
@@ -91,3 +92,21 @@ def test_default_flow_band_is_the_documented_10_kpa2():
     mdot, _ = valve_flow_and_partials(150.0, 149.99, 20.0, *axi.values())  # open: Δp 134.5
     want = valve(150.0, 149.99, 20.0, axi, 10.0)
     assert want > 0 and float(mdot) == pytest.approx(want, rel=1e-12)
+
+
+def test_valve_conductance_and_its_slope_by_default():
+    """Eq. 19's conductance 1/(R_f·√(1 + u^(−2e))) and d/dΔp (returned unless told not to);
+    zero, with zero slope, at and below p_close; signed_root exact (band 0) by default."""
+    axi = PAPER_VALVES["axi"].as_dict()
+
+    def g(dp):
+        u = (dp - axi["pclose"]) / (axi["ptrans"] - axi["pclose"])
+        return 0.0 if u <= 0 else 1.0 / (axi["Rf"] * np.sqrt(1.0 + u ** (-2.0 * axi["e"])))
+
+    for dp in (100.0, 130.0, 174.0, 400.0):
+        value, slope = valve_conductance(dp, axi["Rf"], axi["pclose"], axi["ptrans"], axi["e"])
+        assert float(value) == pytest.approx(g(dp), rel=1e-12)
+        assert float(slope) == pytest.approx(central(g, [dp], 1e-5)[0], rel=1e-6)
+    value, slope = valve_conductance(90.0, axi["Rf"], axi["pclose"], axi["ptrans"], axi["e"])
+    assert float(value) == 0.0 and float(slope) == 0.0
+    assert float(signed_root(-4.0)[0]) == -2.0 and float(signed_root(4.0)[1]) == 0.25
