@@ -9,6 +9,7 @@ reason for each one left.
 Run:  pip install '.[mutation]'
       python benchmarks/mutation.py                      # the modules run so far
       python benchmarks/mutation.py verdict laws --keep /tmp/mut   # chosen ones, keep the clone
+      python benchmarks/mutation.py laws --keep /tmp/mut --retest  # survivors, newer tests
 
 Operators: cosmic-ray's core set minus the binary-operator replacements by >>, <<, |, &,
 ^, // and % (on float arrays they raise at once or are never plausible slips; they cost a
@@ -81,6 +82,11 @@ def mutate(name: str, work: Path, timeout: float) -> dict:
     run(["cr-filter-operators", str(session), str(cfg)], work)
     run(["cosmic-ray", "baseline", str(cfg)], work)  # the tests pass unmutated
     run(["cosmic-ray", "exec", str(cfg), str(session)], work)
+    return {**results(session, work), "minutes": (time.perf_counter() - start) / 60}
+
+
+def results(session: Path, work: Path) -> dict:
+    """Mutants run, killed, skipped and the survivors (path, line, operator, occurrence)."""
     dump = run(["cosmic-ray", "dump", str(session)], work, capture_output=True).stdout
     jobs = [json.loads(line) for line in dump.splitlines() if line.strip()]
     done = [(w, r) for w, r in jobs if r is not None and r.get("test_outcome")]
@@ -88,23 +94,47 @@ def mutate(name: str, work: Path, timeout: float) -> dict:
     survivors = [(m["module_path"], m["start_pos"][0], m["operator_name"], m["occurrence"])
                  for w, r in done for m in w["mutations"] if r["test_outcome"] == "survived"]
     killed = sum(r["test_outcome"] != "survived" for _, r in done)
-    return {"module": path, "mutants": len(done), "killed": killed, "skipped": len(skipped),
-            "score": killed / len(done) if done else float("nan"), "survivors": survivors,
+    return {"mutants": len(done), "killed": killed, "skipped": len(skipped),
+            "score": killed / len(done) if done else float("nan"), "survivors": survivors}
+
+
+def retest(name: str, work: Path) -> dict:
+    """The survivors of a kept session run again against the tests committed since (the
+    clone pulled first): the score after new tests, without running every mutant again."""
+    path, tests = MODULES[name]
+    run(["git", "pull", "-q", "--ff-only", str(ROOT), "HEAD"], work)
+    start = time.perf_counter()
+    out = results(work / f"{name}.sqlite", work)
+    left = []
+    for mpath, line, op, occ in out["survivors"]:
+        res = run(["cosmic-ray", "mutate-and-test", mpath, op, str(occ), f"{PYTEST} {tests}"],
+                  work, capture_output=True).stdout
+        if json.loads(res.strip().splitlines()[-1])["test_outcome"] == "survived":
+            left.append((mpath, line, op, occ))
+    killed = out["mutants"] - len(left)
+    return {**out, "killed": killed, "score": killed / out["mutants"], "survivors": left,
             "minutes": (time.perf_counter() - start) / 60}
 
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("modules", nargs="*", default=list(DEFAULT), choices=sorted(MODULES))
+    ap.add_argument("modules", nargs="*",
+                    help=f"of {', '.join(MODULES)} (default: {' '.join(DEFAULT)})")
     ap.add_argument("--timeout", type=float, default=60.0, help="seconds per mutant's tests")
     ap.add_argument("--keep", type=Path, help="clone here and keep it (default: a temp dir)")
+    ap.add_argument("--retest", action="store_true",
+                    help="only run the survivors of the --keep clone's sessions again")
     args = ap.parse_args(argv)
+    if set(args.modules) - set(MODULES):
+        ap.error(f"unknown module {sorted(set(args.modules) - set(MODULES))}")
+    if args.retest and not (args.keep and args.keep.exists()):
+        ap.error("--retest needs --keep DIR of an earlier run")
     with tempfile.TemporaryDirectory() as tmp:
         work = args.keep or Path(tmp) / "pneunet"
         if not work.exists():
             run(["git", "clone", "-q", "--local", str(ROOT), str(work)], ROOT)
-        for name in args.modules:
-            out = mutate(name, work, args.timeout)
+        for name in args.modules or DEFAULT:
+            out = retest(name, work) if args.retest else mutate(name, work, args.timeout)
             print(f"{name}: {out['killed']}/{out['mutants']} killed "
                   f"({100 * out['score']:.1f} %), {out['minutes']:.1f} min", flush=True)
             for path, line, op, occ in out["survivors"]:
