@@ -110,3 +110,15 @@ def test_valve_conductance_and_its_slope_by_default():
     value, slope = valve_conductance(90.0, axi["Rf"], axi["pclose"], axi["ptrans"], axi["e"])
     assert float(value) == 0.0 and float(slope) == 0.0
     assert float(signed_root(-4.0)[0]) == -2.0 and float(signed_root(4.0)[1]) == 0.25
+
+
+def test_no_pressure_difference_no_flow_with_the_exact_root():
+    """Identification's exact law (band 0) at p_in = p_out: zero flow, not 0/0; the exact
+    root's slope there is infinite (dṁ/dp of √)."""
+    from pneunet.laws import valve_flow
+
+    axi = PAPER_VALVES["axi"].as_dict()
+    assert valve_flow(300.0, 300.0, 96.0, **axi) == 0.0  # open: Δp = 213 kPa
+    assert float(quadrature_flow(150.0, 150.0, 2.0, band=0.0)[0]) == 0.0
+    value, slope = signed_root(0.0)
+    assert float(value) == 0.0 and float(slope) == np.inf
