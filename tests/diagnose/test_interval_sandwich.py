@@ -133,3 +133,88 @@ def test_sandwich_keeps_each_signal_to_itself():
                                rtol=1e-12)
     walk, k, _ = _autoregression([np.cumsum(rng.standard_normal(500))], 2)
     assert k >= 1 and np.max(np.abs(np.roots(np.r_[1.0, -walk]))) <= 0.99 + 1e-12
+
+
+def _white_se(J, r):
+    n, p = J.shape
+    return np.sqrt(np.diag(float(r @ r) / (n - p) * np.linalg.inv(J.T @ J)))
+
+
+@pytest.mark.parametrize("confidence", [0.95, 0.9])
+def test_intervals_are_estimate_plus_minus_student_t_standard_errors(confidence):
+    """White residuals: s.e. √(s²·diag (JᵀJ)⁻¹), s² = rᵀr/(n − p), Student t with n − p
+    degrees of freedom; ends exp(x ∓ t·s.e.) for ln-parameters, x ∓ t·s.e. otherwise."""
+    from scipy import stats
+
+    from pneunet.truth.intervals import intervals
+
+    rng = np.random.default_rng(2)
+    n = 40
+    J = np.column_stack([np.ones(n), np.linspace(0.0, 1.0, n)])
+    r = rng.standard_normal(n)
+    x = np.array([np.log(5.0), np.log(0.2)])
+    ci, se, info = intervals(x, J, r, ["a", "b"], confidence=confidence)
+    assert info["method"] == "white" and info["ljung_box_p"] >= 0.01
+    want_se = _white_se(J, r)
+    tq = stats.t.ppf(0.5 + confidence / 2, n - 2)
+    assert [se["a"], se["b"]] == pytest.approx(want_se, rel=1e-12)
+    assert ci["a"] == pytest.approx(np.exp(x[0] + np.array([-1, 1]) * tq * want_se[0]),
+                                    rel=1e-12)
+    assert info["dof"] == n - 2 and info["s"] == pytest.approx(np.sqrt(r @ r / (n - 2)))
+    lin, _, _ = intervals(x, J, r, ["a", "b"], confidence=confidence, log=False)
+    assert lin["b"] == pytest.approx(x[1] + np.array([-1, 1]) * tq * want_se[1], rel=1e-12)
+
+
+@pytest.mark.parametrize("rho", [0.8, -0.6])
+def test_autocorrelated_intervals_use_the_sandwich_never_narrower_than_white(rho):
+    """Ljung–Box p < 0.01: s.e. the larger of the sandwich's and the white one (positive
+    correlation widens; negative would narrow and is not allowed to), Student t with the
+    effective degrees of freedom less p."""
+    from scipy import stats
+
+    from pneunet.truth.intervals import intervals, sandwich
+
+    rng = np.random.default_rng(4)
+    n = 200
+    t = np.linspace(0.0, 6.0, n)
+    J = np.column_stack([np.exp(-t / 2), t * np.exp(-t / 2)])
+    r = _ar_noise(rng, [rho], n)
+    x = np.array([1.0, 2.0])
+    ci, se, info = intervals(x, J, r, ["a", "b"], log=False)
+    assert info["method"] == "hac" and info["ljung_box_p"] < 0.01
+    cov, hac = sandwich(J, r)
+    hac_se, white = np.sqrt(np.diag(cov)), _white_se(J, r)
+    assert (hac_se > white).all() if rho > 0 else (hac_se < white).all()
+    want = np.maximum(hac_se, white)
+    assert [se["a"], se["b"]] == pytest.approx(want, rel=1e-12)
+    assert info["dof"] == pytest.approx(hac["dof_eff"] - 2, rel=1e-12)
+    tq = stats.t.ppf(0.975, hac["dof_eff"] - 2)
+    assert ci["b"] == pytest.approx(x[1] + np.array([-1, 1]) * tq * want[1], rel=1e-12)
+
+
+def test_sandwich_of_short_signals_and_of_a_perfect_fit():
+    """Signals of 20 samples: at most 20 // 4 = 5 lags (statsmodels' reference with that
+    maxlag); residuals all zero: a zero covariance with n degrees of freedom; an explosive
+    least-squares AR is pulled back to its largest root at exactly 0.99."""
+    from statsmodels.tsa.ar_model import AutoReg, ar_select_order
+
+    from pneunet.truth.intervals import _autoregression, sandwich
+
+    rng = np.random.default_rng(8)
+    n = 20
+    J = np.column_stack([np.ones(n), np.linspace(0.0, 1.0, n)])
+    r = _ar_noise(rng, [0.4], n)
+    k = len(ar_select_order(r, maxlag=5, ic="aic", trend="n").ar_lags)
+    a = AutoReg(r, lags=k, trend="n", hold_back=5).fit().params if k else np.zeros(0)
+    if k == 1:
+        a = a + (2 * (1 + a) + 2 * a) / n
+    cov, info = sandwich(J, r)
+    assert info["ar_order"] == k
+    np.testing.assert_allclose(cov, _reference_sandwich(J, [_whitened(J, r, a)]), rtol=1e-9)
+    cov, info = sandwich(J, np.zeros(n))
+    assert not cov.any() and info["dof_eff"] == n
+    boom = np.zeros(300)
+    for i in range(1, 300):
+        boom[i] = 1.02 * boom[i - 1] + rng.standard_normal()
+    a, k, _ = _autoregression([boom], 2)
+    assert k >= 1 and np.max(np.abs(np.roots(np.r_[1.0, -a]))) == pytest.approx(0.99, abs=1e-9)
