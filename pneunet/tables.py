@@ -4,7 +4,8 @@ The file is read by :mod:`pneunet.csvdata` (every format problem is a DataError 
 file and line).  Its two columns are named ``<quantity>_<unit>``, the unit after the first
 ``_`` with further ``_`` read as ``/``: ``time_s``, ``p_kPa``, ``p_barg`` (gauge),
 ``V_mL``, ``mdot_L_min`` (normal litres, see :mod:`pneunet.units`).  Values are converted
-to internal units; the first column must not decrease (``strict``: must increase).
+to internal units; the first column must not decrease (``strict``: must increase; None:
+the first or the second must increase, as a curve whose pressure is not monotone).
 """
 from __future__ import annotations
 
@@ -16,7 +17,8 @@ from .units import GAUGE_UNITS, SLOTS, pretty, to_internal
 
 
 def read_table(path, slots: tuple[str, str], *, ambient_kpa: float, gas,
-               strict: bool = False, source: str | None = None) -> tuple[np.ndarray, np.ndarray]:
+               strict: bool | None = False,
+               source: str | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The two columns of ``path`` in the internal units of ``slots`` (e.g. ('time',
     'pressure')), as float arrays of at least two rows; messages name ``source`` (default
     ``path``)."""
@@ -39,11 +41,15 @@ def read_table(path, slots: tuple[str, str], *, ambient_kpa: float, gas,
     x, y = (_convert(frame[name].to_numpy(float), name, slot, csv.source, ambient_kpa, gas)
             for name, slot in zip(csv.columns, slots))
     step = np.diff(x)
-    wrong = np.flatnonzero(step <= 0 if strict else step < 0)
+    wrong = np.flatnonzero(step <= 0 if strict or strict is None else step < 0)
+    if wrong.size and strict is None and np.all(np.diff(y) > 0):
+        return x, y  # y increases: a curve x(y) (a balloon's pressure over its volume)
     if wrong.size:
         line = int(frame["line"].to_numpy()[wrong[0] + 1])
-        raise DataError(f"column {csv.columns[0]} must {'increase' if strict else 'not decrease'}"
-                        " from row to row", where=f"{csv.source}:{line}")
+        either = f" (or, for a curve whose {csv.columns[0]} is not monotone, column " \
+                 f"{csv.columns[1]})" if strict is None else ""
+        raise DataError(f"column {csv.columns[0]} must {'not decrease' if strict is False else 'increase'}"
+                        f" from row to row{either}", where=f"{csv.source}:{line}")
     return x, y
 
 

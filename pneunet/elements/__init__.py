@@ -26,8 +26,8 @@ def _load_builtins() -> None:
     if _LOADED:
         return
     _LOADED = True
-    from . import (check_valves, elastic, liquid, mckibben, resistors, sources,  # noqa: F401
-                   thermal, tubes, valves, volumes)
+    from . import (check_valves, elastic, liquid, mckibben, pv_state, resistors,  # noqa: F401
+                   sources, thermal, tubes, valves, volumes)
     from importlib.metadata import entry_points
 
     for ep in entry_points(group="pneunet.elements"):

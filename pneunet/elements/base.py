@@ -194,7 +194,8 @@ class ElementFamily:
         return np.unique(np.concatenate([c[which] for c in corners]))
 
     def initial_pressure(self) -> np.ndarray:
-        """Initial pressure (n,) of storage instances, NaN where not set, kPa."""
+        """Initial pressure (n,) of storage instances, NaN where not set, kPa; or (n, k),
+        one per storage port."""
         return np.full(self.n, np.nan)
 
     def signals(self, t: np.ndarray, p: np.ndarray) -> dict[str, tuple[str, np.ndarray]]:

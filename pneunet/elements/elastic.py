@@ -9,8 +9,10 @@ The mass stored is m = ρ(p)·V(p) with ρ = p·M/(R·T), so the capacitance is
 ``pv_volume`` (aliases ``pv_actuator``, ``free_actuator``: the data-driven actuator, a pouch
 or bellows, FONSim's FreeActuator): V(p) from a table of (p, V) points (a measured curve;
 V must not decrease), interpolated by a monotone cubic (scipy's PchipInterpolator, C¹) and
-continued linearly with its end slopes outside the table.  Signal ``volume_<name>`` is the
-volume, mL.
+continued linearly with its end slopes outside the table.  A table whose pressures are not
+monotone but whose volumes increase (a balloon that snaps through) is p(V) instead, with the
+volume as the state: the part ``pv_volume_state`` (:mod:`pneunet.elements.pv_state`).
+Signal ``volume_<name>`` is the volume, mL.
 """
 from __future__ import annotations
 
@@ -20,7 +22,8 @@ import numpy as np
 
 from ..errors import ParameterError
 from . import register
-from .base import Param
+from .base import ElementSpec, Param
+from .cubic_tables import CubicTables
 from .volumes import StorageNode
 
 _P0 = Param("pressure", "initial absolute pressure, kPa (default: ambient)", low=0.0,
@@ -94,6 +97,9 @@ class PressureVolumeCurve(_ElasticVolume):
         "table": Param("volume", "(p kPa, V mL) points, or a CSV file with columns "
                        "<p>_<unit>,<V>_<unit>", kind="table"),
         "p0": _P0,
+        "V0": Param("volume", "initial volume, mL, of a table whose pressure is not monotone "
+                    "(default: the smallest volume at p0)", low=0.0, low_inclusive=False,
+                    default=np.nan),
     }
 
     @classmethod
@@ -101,38 +107,37 @@ class PressureVolumeCurve(_ElasticVolume):
         p, v = (np.asarray(x, dtype=float) for x in spec.params["table"])
         problem = ("needs at least two points" if p.ndim != 1 or p.shape != v.shape or p.size < 2
                    else "holds a value that is not finite" if not np.all(np.isfinite([p, v]))
-                   else _first_fault(p, np.diff(p) <= 0, "pressures must increase")
-                   or (f"volumes must be > 0: V = {v[0]:g} mL at {p[0]:g} kPa" if v[0] <= 0
-                       else _first_fault(p, np.diff(v) < 0, "volumes must not decrease", v)))
+                   else f"volumes must be > 0: V = {v[0]:g} mL at {p[0]:g} kPa" if v[0] <= 0
+                   else None)
+        if problem is None and not np.all(np.diff(p) > 0):  # p(V): volumes must increase
+            problem = _first_fault(p, np.diff(v) <= 0, "pressures or volumes must increase", v)
+        elif problem is None:
+            problem = _first_fault(p, np.diff(v) < 0, "volumes must not decrease", v)
         if problem:
             raise ParameterError(f"the pressure–volume table {problem}", where=spec.where,
-                                 hint="a table of (p kPa, V mL) points, p increasing")
+                                 hint="a table of (p kPa, V mL) points, p increasing; or V "
+                                      "increasing, p free (a balloon's curve)")
+        if not np.isnan(spec.params["V0"]) and np.all(np.diff(p) > 0):
+            raise ParameterError("V0 chooses the branch of a table whose pressure is not "
+                                 "monotone; this table's is", where=spec.where,
+                                 hint="give the initial pressure p0 instead")
         spec.params["table"] = (p, v)
+
+    @classmethod
+    def expand(cls, spec):
+        """Itself for a monotone V(p); the volume-state part ``pv_volume_state`` (internal
+        node ``NAME.V``) when the pressures are not monotone."""
+        if np.all(np.diff(spec.params["table"][0]) > 0):
+            return [spec]
+        return [ElementSpec("pv_volume_state", spec.name, (spec.nodes[0], f"{spec.name}.V"),
+                            dict(spec.params), spec.span)]
 
     def __init__(self, specs, context):
         super().__init__(specs, context)
-        from scipy.interpolate import PchipInterpolator
-
-        self._curves = []
-        for spec in specs:
-            p, v = spec.params["table"]
-            curve = PchipInterpolator(p, v)
-            slope = curve.derivative()
-            self._curves.append((p[0], p[-1], curve, slope, slope.derivative(),
-                                 float(slope(p[0])), float(slope(p[-1]))))
+        self._curves = CubicTables([spec.params["table"] for spec in specs])
 
     def volume(self, p):
-        p = np.asarray(p, dtype=float)
-        out = np.empty((3,) + p.shape)
-        for i, (lo, hi, curve, slope, bend, slope_lo, slope_hi) in enumerate(self._curves):
-            x = p[..., i]
-            inside = np.clip(x, lo, hi)
-            end_slope = np.where(x < lo, slope_lo, slope_hi)
-            outside = (x < lo) | (x > hi)
-            out[0][..., i] = curve(inside) + np.where(outside, end_slope * (x - inside), 0.0)
-            out[1][..., i] = np.where(outside, end_slope, slope(inside))
-            out[2][..., i] = np.where(outside, 0.0, bend(inside))
-        return out[0], out[1], out[2]
+        return self._curves(p)
 
 
 def _first_fault(p, bad, rule, v=None):

@@ -279,11 +279,12 @@ class CircuitDAE:
         """Initial guess: ``.ic`` values, then volumes' p0, then ambient pressure (kPa)."""
         y = np.full(self.n, self.options.ambient)
         for block in self._blocks:
-            p0 = block.family.initial_pressure()
+            p0 = block.family.initial_pressure()  # (n,), or (n, storage ports)
             for k, port in enumerate(block.family.storage_ports):
                 nodes = block.port_node[:, port]
-                ok = (nodes < self.n) & ~np.isnan(p0)
-                y[nodes[ok]] = p0[ok]
+                start = p0[:, k] if p0.ndim == 2 else p0
+                ok = (nodes < self.n) & ~np.isnan(start)
+                y[nodes[ok]] = start[ok]
         for name, value in self.circuit.initial.items():
             if name in self._index and self._index[name] < self.n:
                 y[self._index[name]] = value

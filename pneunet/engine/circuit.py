@@ -138,7 +138,7 @@ class Circuit:
             elif spec.kind == "table" and isinstance(value, (str, os.PathLike)):
                 from ..tables import read_table
 
-                out[key] = read_table(value, family.table_slots, strict=True,
+                out[key] = read_table(value, family.table_slots, strict=None,
                                       ambient_kpa=self.options.ambient,
                                       gas=self.options.volume_flow_fluid)
             elif spec.kind == "table":
@@ -223,10 +223,12 @@ class Circuit:
         ambient), compliance ``k`` (mL/kPa), initial pressure ``p0``."""
         return self.add("accumulator", name, (node,), V0=V0, k=k, pref=pref, p0=p0, **kw)
 
-    def pv_volume(self, name, node, table, p0=None, **kw):
+    def pv_volume(self, name, node, table, p0=None, V0=None, **kw):
         """Elastic volume from a pressure–volume ``table``: (p kPa, V mL) arrays or a CSV file
-        (columns ``p_<unit>,V_<unit>``), interpolated by a monotone cubic (PCHIP)."""
-        return self.add("pv_volume", name, (node,), table=table, p0=p0, **kw)
+        (columns ``p_<unit>,V_<unit>``), interpolated by a monotone cubic (PCHIP).  Pressures
+        not monotone (V increasing): p(V), the volume a state starting at ``V0`` (mL;
+        default the smallest volume at ``p0``)."""
+        return self.add("pv_volume", name, (node,), table=table, p0=p0, V0=V0, **kw)
 
     def orifice(self, name, a, b, diameter, Cd=None, K=None, **kw):
         """Liquid orifice of ``diameter`` (mm), discharge coefficient ``Cd`` (default 0.61)

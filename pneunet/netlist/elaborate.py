@@ -470,7 +470,7 @@ class _Builder(ModelCards, AnalysisStatements, MeasureStatements, WaveformCalls)
                                 self._converter(label))
         if spec.kind == "table":
             return read_data_file(item, self.source.policy, family.table_slots, self.options,
-                                  label, strict=True)
+                                  label, strict=None)
         if isinstance(item, Call) and spec.kind == "waveform":
             return self._waveform(item, spec.slot, scope, label)
         if isinstance(item, Call):

@@ -83,7 +83,7 @@ def test_bad_tables_and_compliance_are_named_errors(tmp_path):
     c.resistor("R1", "b", "atm", R=1.0)
     with pytest.raises(ParameterError, match="A5.*is -9 mL at the initial pressure 100 kPa"):
         c.tran(1.0)
-    (tmp_path / "c.csv").write_text("p_kPa,V_mL\n100,20\n90,21\n")
+    (tmp_path / "c.csv").write_text("p_kPa,V_mL\n100,20\n90,19\n")  # neither increases
     (tmp_path / "n.pn").write_text("pv_volume A4 b table=c.csv\nR1 b atm 1\n")
     with pytest.raises(PneunetError, match=r"n.pn:1.*A4: table: .*c.csv:3: column p_kPa must "
                                            r"increase"):

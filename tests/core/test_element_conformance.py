@@ -144,6 +144,19 @@ def _pv_volume():
     return c, {"b": 250.0}, dict(kind="pv_volume", nodes=("b",), table=([100, 200], [20, 10]))
 
 
+def _pv_volume_state():
+    c = Circuit("pv_volume_state", ambient=100.0)
+    c.pressure_source("P1", "a", 250.0)
+    c.resistor("R1", "a", "b", R=1.0)
+    # pressure not monotone: volume as state (a balloon), two rising branches through 250 kPa
+    c.pv_volume("A1", "b", table=([100.0, 260.0, 200.0, 240.0, 300.0], [1.0, 5.0, 15.0, 25.0,
+                                                                        35.0]))
+    c.resistor("R2", "a", "d", R=1.0)
+    c.pv_volume("A2", "d", table=([110.0, 260.0, 200.0, 300.0], [1.0, 5.0, 15.0, 35.0]),
+                V0=25.0)
+    return c, {"b": 250.0, "d": 250.0}, None
+
+
 def _orifice():
     c = Circuit("orifice", ambient=100.0, fluid="water")
     c.pressure_source("P1", "a", 400.0)
@@ -185,6 +198,7 @@ def _liquid_check_valve():
     c.accumulator("A1", "m", V0=5.0, k=0.01)
     c.hysteretic_check_valve("D2", "a", "d", "z", R=0.01, pcrack=5.0, preseat=2.0)
     c.volume("V2", "d", V=5.0)
+    c.pv_volume("A3", "m", table=([100.0, 450.0, 350.0, 500.0], [1.0, 5.0, 10.0, 20.0]))
     # no outlet: both fill to the supply pressure (the leak passes the last pcrack)
     return c, {"m": 400.0}, None
 
@@ -222,6 +236,7 @@ CASES = {"pressure_source": _pressure_source, "flow_source": _flow_source,
          "orifice": _orifice, "laminar_tube": _laminar_tube,
          "hysteretic_check_valve": _hysteretic_check_valve, "tube": _tube,
          "tube_liquid": _liquid_tube, "check_valve_liquid": _liquid_check_valve,
+         "pv_volume_state": _pv_volume_state,
          "mckibben": _mckibben, "mckibben_static": _mckibben, "mckibben_damped": _mckibben,
          "mckibben_inertial": _mckibben}
 
