@@ -36,12 +36,17 @@ class PressureVolumeState(ElementFamily):
 
     kind = "pv_volume_state"
     description = "pressure–volume actuator whose pressure is not monotone (volume as state)"
-    ports = ("node", "V")
+    ports = ("node", "state")  # "state": not a line in the schematic
     flow_ports = (0,)
     storage_ports = (0, 1)
     state_ports = (1,)
     fluids = ("gas", "liquid")
     params = PressureVolumeCurve.params
+    table_slots = PressureVolumeCurve.table_slots
+
+    @classmethod
+    def check_spec(cls, spec):  # as pv_volume's (a printed part parses back)
+        PressureVolumeCurve.check_spec(spec)
 
     def __init__(self, specs, context):
         super().__init__(specs, context)

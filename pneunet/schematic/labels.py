@@ -35,7 +35,7 @@ def value_line(part) -> str:
     if part.kind == "valve":
         model = params.get("model")
         return f"Rf={model.Rf:g} pclose={model.pclose:g}" if hasattr(model, "Rf") else ""
-    if part.kind == "pv_volume":
+    if part.kind in ("pv_volume", "pv_volume_state"):
         return "p–V table"
     shown = []
     for key, unit in KEY_VALUES.get(part.kind, []):

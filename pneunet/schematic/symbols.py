@@ -163,6 +163,7 @@ _BUILDERS = {
     "volume": _reservoir, "thermal_volume": lambda: _reservoir("heat"),
     "thermal_chamber": lambda: _reservoir("heat"), "thermal_inlet": _resistor,
     "actuator": _actuator, "accumulator": _accumulator, "pv_volume": _elastic,
+    "pv_volume_state": _elastic,
     "mckibben": _mckibben, "mckibben_static": _mckibben, "mckibben_damped": _mckibben,
     "mckibben_inertial": _mckibben,
 }

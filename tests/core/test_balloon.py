@@ -128,3 +128,14 @@ def test_balloon_from_a_csv_file(tmp_path):
     assert circuit.elements["B1"].kind == "pv_volume_state"
     p, v = circuit.elements["B1"].params["table"]
     np.testing.assert_allclose(p, P_G + AMB) and np.testing.assert_allclose(v, V)
+
+
+def test_printed_balloon_parses_back_to_the_same_run():
+    from pneunet.netlist import print_circuit
+
+    c = _balloon()
+    again = parse_netlist(print_circuit(c)).circuit
+    assert again.elements["B1"].kind == "pv_volume_state"
+    first, second = c.tran(5.0, t_step=0.05), again.tran(5.0, t_step=0.05)
+    np.testing.assert_allclose(second.signals["volume_B1"], first.signals["volume_B1"],
+                               rtol=1e-9)
