@@ -8,6 +8,12 @@
   the valve output, 20 s; in FONSim the membrane valve is a user-written component
   evaluating pneunet's law; the period against pneunet at rtol 1e-9.
 
+* water (issue 34): FONSim's own test of two accumulators draining through a 2 mm × 0.1 m
+  tube (Re 6,900 → laminar, ``tube`` with roughness against ``CircularTube``), 1 s;
+* balloon (issue 34): FONSim's packaged 60 mm balloon curve (read from the installed
+  package; skipped without it) behind the restrictor, 65 kPa gauge with a pulse to 89 kPa:
+  the rest volume before and after the snap-through, 8 s.
+
 Both use FONSim's gas (ρ_stp = 1.23 kg/m³ at 1.013 bar): pneunet's temperature is set so
 that M/(R·T) = ρ_stp/p_atm, and its flow band is 1e-3 kPa² (FONSim's law has none).
 Errors are the largest deviation of any container's pressure from pneunet at
@@ -166,6 +172,152 @@ def oscillator_table(have_fonsim, t_stop=20.0):
               f"{abs(osc.period_s / reference.period_s - 1):.1e} |")
 
 
+# -- issue 34: a water line through the transition, and the balloon that snaps through ------
+FONSIM_WATER = (999.0, 9.77e-4)  # kg/m³, Pa·s (FONSim's ``water``)
+
+
+def pneunet_water(rtol=1e-5):
+    """FONSim's test_02 (water): source at 0.2 bar gauge, a 2 mm × 0.1 m tube (ε 0.0015 mm),
+    two accumulators k = 10¹⁰ Pa/m³ holding 1 and 5 mL at its end (0.3 bar gauge together),
+    1 s: (node pressure on GRID in kPa gauge, seconds)."""
+    from pneunet import Circuit, Liquid
+
+    water = Liquid("fonsim_water", *FONSIM_WATER, bulk_modulus=2.2e6)
+    c = Circuit("water", ambient=P_ATM / 1e3, fluid=water, rtol=rtol, atol=rtol)
+    c.pressure_source("P1", "s", "20kPag")
+    c.tube("T1", "s", "x", length="0.1m", diameter="2mm", roughness="0.0015mm", segments=1)
+    for name in ("A0", "A1"):  # p = k·v + p_atm: 0.1 mL/kPa, 1 mL at 10 kPa gauge
+        c.accumulator(name, "x", V0=1.0, k=0.1, pref="10kPag", p0="30kPag")
+    start = time.perf_counter()
+    sol = c.tran(1.0, t_step=0.01)
+    seconds = time.perf_counter() - start
+    return np.interp(GRID[GRID <= 1.0], sol.t, sol.pressure("x")) - P_ATM / 1e3, seconds
+
+
+def fonsim_water():
+    """The same in FONSim (its own test, CircularTube's laminar–Haaland blend), or None."""
+    try:
+        import fonsim as fons
+    except ImportError:
+        return None
+    system = fons.System("water")
+    system.add(fons.PressureSource("src", pressure=fons.cnorm.pressure_atmospheric + 0.2e5),
+               fons.CircularTube("tube", fons.water, diameter=2e-3, length=0.1))
+    for label, ml in (("a0", 1.0), ("a1", 5.0)):
+        acc = fons.LinearAccumulator(label, fluid=fons.water, k=1e5 / 10e-6, v0=0,
+                                     p0=fons.cnorm.pressure_atmospheric)
+        acc.states[0].initial_value = ml * 1e-6 * fons.water.rho
+        system.add(acc)
+    system.connect("src", "tube")
+    system.connect("a0", "tube")
+    system.connect(("a0", "a"), ("a1", "a"))
+    with contextlib.redirect_stdout(io.StringIO()):
+        sim = fons.Simulation(system, duration=1.0, step=(1e-4, 1e-2))
+        start = time.perf_counter()
+        sim.run()
+        seconds = time.perf_counter() - start
+    p = system.get("a0").get("pressure")
+    return np.interp(GRID[GRID <= 1.0], sim.times, p / 1e3) - fons.cnorm.pressure_atmospheric / 1e3, \
+        seconds
+
+
+BALLOON_TIMES = [0.0, 0.5, 3.0, 3.2, 4.0, 4.2, 8.0]
+BALLOON_GAUGE_KPA = [0.0, 65.0, 65.0, 89.0, 89.0, 65.0, 65.0]
+
+
+def _balloon_curve():
+    """FONSim's packaged 60 mm balloon (volume mL, pressure mbar) as FONSim reads it
+    (autocorrect: V from 0, p from 0 gauge): (V mL, p kPa gauge), or None without FONSim."""
+    try:
+        import importlib.resources as resources
+        text = (resources.files("fonsim") / "resources" /
+                "Measurement_60mm_balloon_actuator_01.csv").read_text()
+    except (ImportError, ModuleNotFoundError, FileNotFoundError):
+        return None
+    rows = np.array([[float(x) for x in line.split(",")] for line in text.splitlines()[3:]
+                     if line.strip()])
+    return rows[:, 1] - rows[0, 1], (rows[:, 2] - rows[0, 2]) / 10.0
+
+
+def pneunet_balloon(curve, t_stop=8.0, rtol=1e-5):
+    """The balloon behind a FlowRestrictor (d 0.5 mm, K 0.6) under 65 kPa gauge, a pulse to
+    89 kPa (over its 87 kPa peak) from 3 to 4.2 s: ((V before, V after) mL, volume on the
+    GRID, seconds)."""
+    from pneunet import Circuit
+    from pneunet.waveforms import PiecewiseLinear
+
+    amb = P_ATM / 1e3
+    r = 4 / (math.pi * D ** 2) * math.sqrt(K_FACTOR * P_ATM / RHO_STP) * 1e-9
+    c = Circuit("balloon", ambient=amb, temperature=_matched_temperature(), rtol=rtol,
+                atol=rtol)
+    c.pressure_source("P1", "s", PiecewiseLinear(BALLOON_TIMES,
+                                                 [amb + g for g in BALLOON_GAUGE_KPA]))
+    c.resistor("R1", "s", "b", R=r)
+    volume, gauge = curve
+    c.pv_volume("B1", "b", table=(gauge + amb, volume + 1e-3), V0=1e-3)  # V > 0: 1 µL more
+    start = time.perf_counter()
+    sol = c.tran(t_stop, t_step=0.01)
+    seconds = time.perf_counter() - start
+    v = sol.signals["volume_B1"] - 1e-3
+    grid = np.arange(0.0, t_stop + 1e-9, 0.01)
+    return (np.interp(2.9, sol.t, v), v[-1]), np.interp(grid, sol.t, v), seconds
+
+
+def fonsim_balloon(t_stop=8.0):
+    """The same in FONSim (FreeActuator, its curve linear between the points), or None."""
+    try:
+        import fonsim as fons
+    except ImportError:
+        return None
+    atm = fons.cnorm.pressure_atmospheric
+    system = fons.System("balloon")
+    system.add(fons.PressureSource("src", pressure=lambda t: atm + 1e3 * np.interp(
+                   t, BALLOON_TIMES, BALLOON_GAUGE_KPA)),
+               fons.FlowRestrictor("r", fluid=fons.air, diameter=D, k=K_FACTOR),
+               fons.FreeActuator("b", fluid=fons.air))
+    system.connect("src", "r")
+    system.connect("r", "b")
+    with contextlib.redirect_stdout(io.StringIO()):
+        sim = fons.Simulation(system, duration=t_stop, step=(1e-4, 1e-2))
+        start = time.perf_counter()
+        sim.run()
+        seconds = time.perf_counter() - start
+    mass = system.get("b").get_state("mass")
+    p = system.get("b").get("pressure", "a")
+    v = mass / fons.air.rho_stp * atm / p * 1e6  # mL
+    grid = np.arange(0.0, t_stop + 1e-9, 0.01)
+    return (np.interp(2.9, sim.times, v), v[-1]), np.interp(grid, sim.times, v), seconds
+
+
+def issue34_table(have_fonsim):
+    """The water line and the balloon: times and differences."""
+    ours, ours_s = pneunet_water()
+    print("\nwater, two accumulators through a 2 mm × 0.1 m tube (FONSim's test_02), 1 s")
+    print("| simulator | s | p(0.05 s) kPag | p(0.2 s) kPag | differs from pneunet by |")
+    print("|---|---|---|---|---|")
+    at = (lambda p, t: p[int(round(t / 0.01))])
+    print(f"| pneunet | {ours_s:.3f} | {at(ours, 0.05):.3f} | {at(ours, 0.2):.3f} | — |")
+    theirs = fonsim_water() if have_fonsim else None
+    if theirs:
+        worst = np.max(np.abs(theirs[0] - ours)[1:])  # FONSim's t = 0: before its accumulators meet
+        print(f"| FONSim | {theirs[1]:.3f} | {at(theirs[0], 0.05):.3f} | "
+              f"{at(theirs[0], 0.2):.3f} | {worst:.3f} kPa ({worst / 10:.1%} of the swing) |")
+    curve = _balloon_curve()
+    if curve is None:
+        print("\nballoon: FONSim's measured curve needs FONSim installed; skipped")
+        return
+    print("\nballoon (FONSim's 60 mm curve) behind a restrictor: 65 kPag, pulse to 89 kPag, 8 s")
+    print("| simulator | s | V at 2.9 s mL | V at 8 s mL | differs from pneunet by |")
+    print("|---|---|---|---|---|")
+    (before, after), v_ours, seconds = pneunet_balloon(curve)
+    print(f"| pneunet | {seconds:.3f} | {before:.2f} | {after:.2f} | — |")
+    theirs = fonsim_balloon() if have_fonsim else None
+    if theirs:
+        (b2, a2), v_theirs, s2 = theirs
+        print(f"| FONSim | {s2:.3f} | {b2:.2f} | {a2:.2f} | "
+              f"{np.max(np.abs(v_theirs - v_ours)):.2f} mL at most |")
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sizes", default="1,10,30,100,300,1000,10000")
@@ -190,6 +342,7 @@ def main(argv=None):
         cells += [f"{theirs[1]:.2f}", err(theirs[0])] if theirs else ["—", "—"]
         print(f"| {n} | " + " | ".join(cells) + " |", flush=True)
     oscillator_table(have_fonsim)
+    issue34_table(have_fonsim)
 
 
 if __name__ == "__main__":
