@@ -14,6 +14,9 @@ Flow law of a segment (isothermal ideal gas, Δ = p_a² − p_b², kPa²):
 * with ``roughness`` ε given: the same blend with Haaland's friction factor for the
   turbulent flow (:mod:`pneunet.elements.friction`).
 
+``volume=`` replaces the bore's volume (split over the segments); ``volume=0`` makes the
+tube one part of kind ``tube_line``: the flow law alone, no storage at its ends.
+
 In a liquid circuit a segment stores ρ·V/K at each end (as a ``volume``), Δ = p_a − p_b,
 and the law is Darcy–Weisbach: laminar Hagen–Poiseuille blended with Haaland (ε = 0 when
 not given; :mod:`pneunet.elements.friction`), or with ``f``: Δp = 4f·8L·ṁ²/(π²·D⁵·ρ).
@@ -86,6 +89,8 @@ class Tube(ElementFamily):
                    low=0.0, high=1.0, low_inclusive=False, default=np.nan),
         "roughness": Param("length", "wall roughness ε, mm (turbulent flow by Haaland; "
                            "default: a smooth wall)", low=0.0, default=np.nan),
+        "volume": Param("volume", "volume the line holds, mL (default: its bore's "
+                        "π/4·D²·L; 0: none, a resistance only)", low=0.0, default=np.nan),
     }
 
     @classmethod
@@ -106,12 +111,15 @@ class Tube(ElementFamily):
     def expand(cls, spec):
         """N segment elements ``NAME.s1`` … joined at nodes ``NAME.1`` … (see module doc)."""
         p = spec.params
+        if p["volume"] == 0:  # no volume: one resistance, no storage at its ends
+            return [ElementSpec("tube_line", spec.name, spec.nodes, {**p, "segments": 1.0},
+                                spec.span)]
         n = default_segments(p["length"], p["diameter"]) if np.isnan(p["segments"]) \
             else int(p["segments"])
         if n == 1:
             return [spec]
         nodes = [spec.nodes[0], *(f"{spec.name}.{k}" for k in range(1, n)), spec.nodes[1]]
-        part = {**p, "length": p["length"] / n, "segments": 1.0}
+        part = {**p, "length": p["length"] / n, "segments": 1.0, "volume": p["volume"] / n}
         return [ElementSpec(spec.kind, f"{spec.name}.s{k + 1}", (nodes[k], nodes[k + 1]),
                             dict(part), spec.span) for k in range(n)]
 
@@ -120,7 +128,9 @@ class Tube(ElementFamily):
         opts, gas, liquid = context.options, context.gas, context.options.liquid
         length, diameter, self._f = self.column("length"), self.column("diameter"), self.column("f")
         roughness = self.column("roughness")
-        half_volume = np.pi / 8 * diameter ** 2 * length * 1e-3  # mL
+        given = self.column("volume")
+        half_volume = np.where(np.isnan(given), np.pi / 4 * diameter ** 2 * length * 1e-3,
+                               given) / 2  # mL
         self._explicit = ~np.isnan(self._f)
         self._liquid = liquid is not None
         # Haaland where ε is given or the fluid is a liquid (not where f is given)
@@ -188,3 +198,16 @@ class Tube(ElementFamily):
 
     def signals(self, t, p):
         return {"mdot": ("mg/s", self._through(p[..., 0], p[..., 1], False)[0])}
+
+
+@register
+class TubeLine(Tube):
+    """A ``tube`` given ``volume=0``: its flow law alone, storing nothing at its ends."""
+
+    kind = "tube_line"
+    description = "line without volume (tube volume=0): the tube's flow law only"
+    storage_ports = ()
+
+    def outflows(self, t, p, pdot):
+        q, dq_dp, _ = super().outflows(t, p, pdot)
+        return q, dq_dp, None

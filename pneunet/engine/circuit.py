@@ -184,13 +184,14 @@ class Circuit:
         """Tube resistor from length and diameter (mm) and Fanning friction factor."""
         return self.add("pipe", name, (a, b), length=length, diameter=diameter, f=f, **kw)
 
-    def tube(self, name, a, b, length, diameter, segments=None, f=None, roughness=None, **kw):
+    def tube(self, name, a, b, length, diameter, segments=None, f=None, roughness=None,
+             volume=None, **kw):
         """Gas or liquid line with its own volume: ``length`` and inner ``diameter`` (mm) in
         ``segments`` lumped segments (default from L/D); Fanning ``f`` (default: laminar
         blended with turbulent flow: Blasius, or Haaland with wall ``roughness`` in mm and
-        in a liquid circuit)."""
+        in a liquid circuit); ``volume`` (mL) replaces the bore's, 0: none."""
         return self.add("tube", name, (a, b), length=length, diameter=diameter,
-                        segments=segments, f=f, roughness=roughness, **kw)
+                        segments=segments, f=f, roughness=roughness, volume=volume, **kw)
 
     def volume(self, name, node, V, n=None, p0=None, **kw):
         """Rigid volume ``V`` (mL), polytropic exponent ``n``, initial pressure ``p0``."""

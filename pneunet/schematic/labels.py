@@ -9,6 +9,7 @@ KEY_VALUES = {
     "resistor": [("R", "kPa·s/mg")], "thermal_inlet": [("r", "")],
     "orifice": [("diameter", "mm"), ("Cd", "")],
     "pipe": [("length", "mm"), ("diameter", "mm")], "tube": [("length", "mm"), ("diameter", "mm")],
+    "tube_line": [("length", "mm"), ("diameter", "mm")],
     "laminar_tube": [("length", "mm"), ("diameter", "mm")],
     "volume": [("V", "mL")], "thermal_volume": [("V", "mL"), ("tau", "s")],
     "thermal_chamber": [("V", "mL"), ("tau", "s")],

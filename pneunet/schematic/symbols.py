@@ -158,7 +158,7 @@ EXHAUST_W = 18
 _BUILDERS = {
     "pressure_source": _pressure_source, "flow_source": _flow_source,
     "resistor": _resistor, "orifice": _orifice, "pipe": _tube, "laminar_tube": _tube,
-    "tube": lambda: _tube(ticks=2), "valve": _valve, "check_valve": _check_valve,
+    "tube": lambda: _tube(ticks=2), "tube_line": _tube, "valve": _valve, "check_valve": _check_valve,
     "hysteretic_check_valve": lambda: _check_valve(double=True),
     "volume": _reservoir, "thermal_volume": lambda: _reservoir("heat"),
     "thermal_chamber": lambda: _reservoir("heat"), "thermal_inlet": _resistor,

@@ -185,9 +185,11 @@ def _tube():
     c.tube("T2", "m", "atm", length=500.0, diameter=2.0, segments=3, f=0.008)
     c.tube("T3", "a", "d", length=2000.0, diameter=1.0, segments=2)  # laminar/Blasius, dead end
     c.tube("T4", "a", "e", length=900.0, diameter=3.0, roughness=0.01)  # Haaland, dead end
+    c.tube("T5", "e", "g", length=900.0, diameter=3.0, volume=0)  # tube_line, to a volume
+    c.volume("V5", "g", V=5.0)
     # equal halves in quadrature (eq. 5); the dead ends at the source pressure
     return c, {"m": np.sqrt((400.0 ** 2 + 100.0 ** 2) / 2), "d": 400.0, "T3.1": 400.0,
-               "e": 400.0}, dict(kind="tube", nodes=("a", "b"), length=10.0, diameter=2.0,
+               "e": 400.0, "g": 400.0}, dict(kind="tube", nodes=("a", "b"), length=10.0, diameter=2.0,
                                  segments=1.5)
 
 
@@ -236,7 +238,7 @@ CASES = {"pressure_source": _pressure_source, "flow_source": _flow_source,
          "orifice": _orifice, "laminar_tube": _laminar_tube,
          "hysteretic_check_valve": _hysteretic_check_valve, "tube": _tube,
          "tube_liquid": _liquid_tube, "check_valve_liquid": _liquid_check_valve,
-         "pv_volume_state": _pv_volume_state,
+         "pv_volume_state": _pv_volume_state, "tube_line": _tube,
          "mckibben": _mckibben, "mckibben_static": _mckibben, "mckibben_damped": _mckibben,
          "mckibben_inertial": _mckibben}
 

@@ -149,3 +149,21 @@ def test_closed_liquid_line_stores_rho_v_over_k():
     volume_ml = math.pi / 4 * 2.0 ** 2 * 1000.0 * 1e-3
     rise = 0.5 * K / (RHO * volume_ml)  # kPa: mg·kPa/((mg/mL)·mL)
     assert sol.pressure("b")[-1] - AMB == pytest.approx(rise, rel=1e-4)
+
+
+@pytest.mark.parametrize("volume, stored_ml", [(None, 1.0 * math.pi), (0, 0.0), ("5mL", 5.0)])
+def test_a_tube_holds_its_bore_its_given_volume_or_none(volume, stored_ml):
+    """0.5 mg of air into two 10 mL volumes joined by a 2 mm × 1 m tube: the pressure rise is
+    the mass over M·(20 mL + the line's volume)/(R·T) (volume=0: a resistance only)."""
+    from pneunet.waveforms import Step
+
+    c = Circuit("two volumes", ambient=AMB, rtol=1e-8, atol=1e-8)
+    c.flow_source("F1", "atm", "a", Step(0.5, 0.0, at=1.0))
+    c.volume("V1", "a", V=10.0)
+    c.tube("T1", "a", "b", length=1000.0, diameter=2.0, volume=volume)
+    c.volume("V2", "b", V=10.0)
+    assert [e.kind for e in c.elements.values() if e.name.startswith("T1")][0] == \
+        ("tube_line" if volume == 0 else "tube")
+    sol = c.tran(4.0, t_step=0.01)
+    capacitance = 28.965e-3 * (20.0 + stored_ml) * 1e-6 / (8.314462618 * T)  # kg/Pa
+    assert sol.pressure("b")[-1] - AMB == pytest.approx(0.5e-6 / capacitance / 1e3, rel=1e-5)
