@@ -38,18 +38,23 @@ def check_fluid(name: str, what: str, **positive: float) -> None:
 class Gas:
     """An ideal gas, by molar mass M in g/mol; its viscosity μ0 (Pa·s) at t0 (K), and
     Sutherland's constant S (K) for μ(T) = μ0·(T/t0)^1.5·(t0 + S)/(T + S) (NaN: μ0 at any
-    T; μ0 NaN: unknown, a ``tube`` then needs ``f=``)."""
+    T; μ0 NaN: unknown, a ``tube`` then needs ``f=``); its heat-capacity ratio γ = c_p/c_v
+    (the thermal elements' default)."""
 
     name: str
     molar_mass_g_mol: float
     mu0: float = math.nan
     t0: float = 273.15
     sutherland: float = math.nan
+    gamma: float = 1.4
 
     def __post_init__(self):
         check_fluid(self.name, "gas", molar_mass=self.molar_mass_g_mol, t0=self.t0,
                     **{k: v for k, v in (("mu", self.mu0), ("S", self.sutherland))
                        if not (isinstance(v, float) and math.isnan(v))})
+        if not 1.0 < self.gamma <= 5.0 / 3.0:
+            raise ParameterError(f"gas {self.name}: gamma = c_p/c_v must lie in (1, 5/3], got "
+                                 f"{self.gamma:g}", hint="1.4 diatomic (air), 1.667 monatomic")
         if math.isnan(self.mu0) and not math.isnan(self.sutherland):
             raise ParameterError(f"gas {self.name}: Sutherland's S needs the viscosity mu "
                                  "at T0", hint="e.g. mu=1.87e-5Pa*s T0=273.15K S=79.4K")

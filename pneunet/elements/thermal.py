@@ -52,8 +52,8 @@ class ThermalVolume(ElementFamily):
         "V": Param("volume", "volume, mL", low=0.0, low_inclusive=False),
         "tau": Param("time", "thermal time constant of the gas, s (0+ isothermal, large "
                      "adiabatic)", low=0.0, low_inclusive=False),
-        "gamma": Param("dimensionless", "heat-capacity ratio c_p/c_v (1.4 air)", low=1.0,
-                       high=1.67, default=1.4, low_inclusive=False),
+        "gamma": Param("dimensionless", "heat-capacity ratio c_p/c_v (default: the gas's, "
+                       "1.4 for air)", low=1.0, high=1.67, default=np.nan, low_inclusive=False),
         "scaling": Param("dimensionless", "exponent s of the gas mass in the wall "
                          "conductance: 0 constant hA (Simscape, Modelica), 1 constant τ",
                          low=0.0, high=1.0, default=0.0),
@@ -66,7 +66,8 @@ class ThermalVolume(ElementFamily):
         opts = context.options
         self._c = context.gas.capacitance(self.column("V"), opts.temperature)
         self._tau = self.column("tau")
-        self._gamma = self.column("gamma")
+        self._gamma = np.where(np.isnan(self.column("gamma")), context.gas.gamma,
+                               self.column("gamma"))
         self._scaling = self.column("scaling")
         p0 = self.column("p0")
         self._p_ref = np.where(np.isnan(p0), opts.ambient, p0)

@@ -3,8 +3,9 @@
 
 * liquid: ``rho`` (density), ``mu`` (dynamic viscosity), ``K`` (bulk modulus), all required:
   ``.fluid glycerol rho=1260kg/m3 mu=1.41Pa*s K=4.35GPa``;
-* gas: ``M`` (molar mass, required), ``mu`` (viscosity at ``T0``, default 273.15 K) and
-  ``S`` (Sutherland's constant, K; without it μ is the same at every temperature):
+* gas: ``M`` (molar mass, required), ``mu`` (viscosity at ``T0``, default 273.15 K),
+  ``S`` (Sutherland's constant, K; without it μ is the same at every temperature) and
+  ``gamma`` (c_p/c_v, default 1.4: the thermal elements' default):
   ``.fluid helium M=4.0026g/mol mu=1.87e-5Pa*s S=79.4K``.
 
 Keys are case-insensitive; bare numbers are in kg/m³, Pa·s, kPa, g/mol and K.
@@ -22,7 +23,8 @@ LIQUID_KEYS = {"rho": ("density", "density"), "mu": ("viscosity", "dynamic visco
                "k": ("pressure_difference", "bulk modulus")}
 GAS_KEYS = {"m": ("molar_mass", "molar mass"), "mu": ("viscosity", "viscosity at T0"),
             "t0": ("temperature", "temperature of mu"), "s": ("temperature", "Sutherland's "
-                                                           "constant")}
+                                                           "constant"),
+            "gamma": ("dimensionless", "heat-capacity ratio c_p/c_v")}
 EXAMPLE = ".fluid glycerol rho=1260kg/m3 mu=1.41Pa*s K=4.35GPa, or .fluid helium M=4.0026g/mol"
 
 
@@ -44,7 +46,7 @@ def read_fluid_cards(statements, number) -> tuple:
             if key not in known:
                 kind = "liquid" if known is LIQUID_KEYS else "gas"
                 raise _err(f".fluid {name_item.text}: unknown key {it.key.text!r} for a {kind}",
-                           it.key, "a liquid takes rho, mu, K; a gas M, mu, T0, S")
+                           it.key, "a liquid takes rho, mu, K; a gas M, mu, T0, S, gamma")
             if key in values:
                 raise _err(f".fluid {name_item.text}: {it.key.text} given twice", it.key)
             values[key] = number(it.value, known[key][0], it.key.text)
@@ -80,6 +82,6 @@ def _build(name_item, values, st):
         if liquid:
             return Liquid(name, values["rho"], values["mu"], values["k"])
         return Gas(name, values["m"], values.get("mu", float("nan")), values.get("t0", 273.15),
-                   values.get("s", float("nan")))
+                   values.get("s", float("nan")), values.get("gamma", 1.4))
     except PneunetError as err:
         raise _err(err.message, name_item, err.hint) from None

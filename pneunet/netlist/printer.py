@@ -66,7 +66,7 @@ def _fluid_card(fluid) -> str:
         card += f" mu={_num(fluid.mu0)}Pa*s T0={_num(fluid.t0)}K"
     if not math.isnan(fluid.sutherland):
         card += f" S={_num(fluid.sutherland)}K"
-    return card
+    return card + (f" gamma={_num(fluid.gamma)}" if fluid.gamma != 1.4 else "")
 
 
 def print_circuit(circuit, *, header: bool = True) -> str:

@@ -5,6 +5,7 @@ import math
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 from pneunet import Circuit, Gas, Liquid, ParameterError
@@ -99,3 +100,18 @@ def test_unknown_fluid_names_the_way_to_define_one(tmp_path):
         Circuit(fluid=Liquid("water", 999.0, 1e-3, 2.2e6))
     with pytest.raises(ParameterError, match="viscosity must be|mu must be"):
         Liquid("thin", 999.0, 0.0, 2.2e6)
+
+
+def test_a_user_gas_gives_the_thermal_volumes_its_gamma():
+    """Helium (γ = 5/3) from a .fluid card: a thermal volume without gamma= takes the gas's;
+    the same run with gamma=1.667 given agrees, and air's 1.4 differs."""
+    def run(gamma, gas=".fluid he M=4.0026g/mol gamma=1.6666\n.options gas=he\n"):
+        text = (gas + "P1 s PWL(0 100kPa 0.1s 300kPa)\nR1 s b 0.02\n"
+                f"thermal_volume VT1 b bT V=50mL tau=2s {gamma}\n")
+        return parse_netlist(text).circuit.tran(0.5, t_step=0.01).pressure("bT")
+
+    default, given = run(""), run("gamma=1.6666")
+    np.testing.assert_allclose(default, given, rtol=1e-9)
+    assert np.max(np.abs(default - run("gamma=1.4"))) > 1.0  # kPa: γ matters here
+    with pytest.raises(NetlistError, match=r"<netlist>:1:8:.*gamma = c_p/c_v must lie in"):
+        parse_netlist(".fluid he M=4g/mol gamma=2\nP1 a 1bar\nR1 a atm 1\n")
