@@ -8,7 +8,9 @@ node is m = ρ(p)·V, so the node takes
 
     gas:     q = ρ1·(V·ṗ + p·V̇),  ρ1 = M/(R·T)       liquid:  q = ρ·(V/K·ṗ + V̇)
 
-and the state row holds p = P(V) differentiated, with the drift pulled back over τ = 1 ms:
+and the state row holds p = P(V) differentiated, with the drift pulled back over τ = 1 µs
+(a mode at −1/τ, faster than any the circuit has: the stability report's slowest mode stays
+the circuit's own):
 
     P'(V)·V̇ − ṗ + (P(V) − p)/τ = 0                   [kPa/s]
 
@@ -27,7 +29,7 @@ from .cubic_tables import CubicTables
 from .base import ElementFamily
 from .elastic import PressureVolumeCurve
 
-TAU = 1e-3  # s, the pull-back of p towards P(V)
+TAU = 1e-6  # s, the pull-back of p towards P(V)
 
 
 @register

@@ -139,3 +139,16 @@ def test_printed_balloon_parses_back_to_the_same_run():
     first, second = c.tran(5.0, t_step=0.05), again.tran(5.0, t_step=0.05)
     np.testing.assert_allclose(second.signals["volume_B1"], first.signals["volume_B1"],
                                rtol=1e-9)
+
+
+def test_operating_point_reports_the_balloons_own_mode():
+    """At rest on the first branch, the slowest mode is the fill through R1: λ = −G/C with
+    G = dṁ/dp of the regularised root at zero flow, 2p/(R·√ε), and C = ρ1·(V + p/P'(V))."""
+    c = _balloon()
+    op = c.op(t=2.9)
+    p = AMB + 65.0
+    v = PchipInterpolator(V, P_G).solve(65.0, extrapolate=False)[0]
+    slope = PchipInterpolator(V, P_G).derivative()(v)
+    rate = -(2 * p / (R * np.sqrt(10.0))) / (RHO1 * (v + p / slope))
+    assert op.pressures["b"] == pytest.approx(p, abs=1e-6)
+    assert op.stability.slowest.real == pytest.approx(rate, rel=1e-3)
