@@ -213,8 +213,82 @@ def test_sandwich_of_short_signals_and_of_a_perfect_fit():
     np.testing.assert_allclose(cov, _reference_sandwich(J, [_whitened(J, r, a)]), rtol=1e-9)
     cov, info = sandwich(J, np.zeros(n))
     assert not cov.any() and info["dof_eff"] == n
-    boom = np.zeros(300)
-    for i in range(1, 300):
-        boom[i] = 1.02 * boom[i - 1] + rng.standard_normal()
-    a, k, _ = _autoregression([boom], 2)
-    assert k >= 1 and np.max(np.abs(np.roots(np.r_[1.0, -a]))) == pytest.approx(0.99, abs=1e-9)
+    for coeffs in ([1.02], [0.5, 0.6]):  # largest roots 1.02 and 1.064
+        boom = _ar_noise(np.random.default_rng(0), coeffs, 300)
+        a, k, _ = _autoregression([boom], 2)
+        assert k == len(coeffs)
+        assert np.max(np.abs(np.roots(np.r_[1.0, -a]))) == pytest.approx(0.99, abs=1e-9)
+
+
+def test_ar_order_and_coefficients_are_statsmodels_at_any_scale():
+    """AR(3) residuals in kPa, Pa or MPa: the order statsmodels' AIC picks (3; the penalty
+    2 per coefficient), the same coefficients, a covariance scaling with the square."""
+    from statsmodels.tsa.ar_model import AutoReg, ar_select_order
+
+    from pneunet.truth.intervals import sandwich
+
+    n = 300
+    t = np.linspace(0.0, 6.0, n)
+    J = np.column_stack([np.exp(-t / 2), t * np.exp(-t / 2)])
+    r = _ar_noise(np.random.default_rng(0), [0.5, -0.3, 0.4], n)
+    assert ar_select_order(r, maxlag=15, ic="aic", trend="n").ar_lags == [1, 2, 3]
+    a = AutoReg(r, lags=3, trend="n", hold_back=15).fit().params
+    want = _reference_sandwich(J, [_whitened(J, r, a)])
+    for scale in (1e-3, 1.0, 1e3):
+        cov, info = sandwich(J, scale * r)
+        assert info["ar_order"] == 3 and info["ar_sum"] == pytest.approx(a.sum(), rel=1e-9)
+        np.testing.assert_allclose(cov, scale ** 2 * want, rtol=1e-9)
+
+
+def test_white_residuals_give_the_heteroskedasticity_consistent_sandwich():
+    """AR order 0 (white): (JᵀJ)⁻¹ Σ Jₜ Jₜᵀ rₜ² (JᵀJ)⁻¹ · n/(n − p), White's HC1."""
+    from pneunet.truth.intervals import sandwich
+
+    n = 300
+    J = np.column_stack([np.ones(n), np.linspace(0.0, 1.0, n)])
+    r = np.random.default_rng(0).standard_normal(n)
+    cov, info = sandwich(J, r)
+    assert info["ar_order"] == 0 and info["ar_sum"] == 0.0
+    Hinv = np.linalg.inv(J.T @ J)
+    want = Hinv @ (J * r[:, None] ** 2).T @ J @ Hinv * n / (n - 2)
+    np.testing.assert_allclose(cov, want, rtol=1e-9)
+
+
+def test_negatively_correlated_residuals_keep_their_coefficient_and_n_dof():
+    """ρ̂ < 0: no bias correction (it is for the positive correlation a fit hides); the
+    effective degrees of freedom are at most n."""
+    from statsmodels.tsa.ar_model import AutoReg
+
+    from pneunet.truth.intervals import sandwich
+
+    n = 300
+    J = np.column_stack([np.ones(n), np.linspace(0.0, 1.0, n)])
+    r = _ar_noise(np.random.default_rng(0), [-0.6], n)
+    cov, info = sandwich(J, r)
+    a = AutoReg(r, lags=1, trend="n", hold_back=15).fit().params
+    assert info["ar_order"] == 1 and info["ar_sum"] == pytest.approx(a[0], rel=1e-12)
+    np.testing.assert_allclose(cov, _reference_sandwich(J, [_whitened(J, r, a)]), rtol=1e-9)
+    assert info["dof_eff"] == n
+
+
+def test_ljung_box_needs_more_than_three_times_its_lags():
+    from pneunet.truth.intervals import ljung_box_p
+
+    r = np.random.default_rng(0).standard_normal(31)
+    assert 0.0 < ljung_box_p(r) <= 1.0
+    assert np.isnan(ljung_box_p(r[:30])) and np.isnan(ljung_box_p(r[:20]))
+
+
+def test_ar_order_is_statsmodels_aic_choice_on_forty_records():
+    """40 records of 120 samples, random AR(4) coefficients in ±0.3: the order chosen is
+    statsmodels' ar_select_order (AIC, at most 12 lags) every time (orders 0 to 9 here)."""
+    from statsmodels.tsa.ar_model import ar_select_order
+
+    from pneunet.truth.intervals import _autoregression
+
+    rng = np.random.default_rng(1)
+    records = [_ar_noise(rng, rng.uniform(-0.3, 0.3, 4), 120) for _ in range(40)]
+    want = [len(ar_select_order(x, maxlag=12, ic="aic", trend="n").ar_lags or [])
+            for x in records]
+    assert len(set(want)) >= 5
+    assert [_autoregression([x], 2)[1] for x in records] == want
