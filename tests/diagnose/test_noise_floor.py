@@ -20,8 +20,10 @@ def test_second_differences_by_hand_and_within_groups():
     # a NaN sample drops the three differences it is in
     d2, centres = second_differences([0.0, 1.0, np.nan, 9.0, 16.0, 25.0, 36.0], centres=True)
     np.testing.assert_array_equal(centres, [4, 5])
-    assert second_differences([1.0, 2.0]).size == 0
-    assert second_differences([1.0, 2.0], centres=True)[1].size == 0
+    assert second_differences([1.0, 4.0, 9.0]).tolist() == [2.0]  # three samples: one
+    for short in ([1.0, 2.0], [1.0], []):
+        assert second_differences(short).size == 0
+        assert second_differences(short, centres=True)[1].size == 0
 
 
 def test_robust_sigma_is_the_normalised_mad_over_root_six():
@@ -59,6 +61,8 @@ def test_segments_number_the_runs_and_isolate_each_gap():
     assert g[0] == g[1] and g[4] == g[5] == g[6] and g[0] != g[4] and g[0] >= 0
     assert g[2] < 0 and g[3] < 0 and g[7] < 0 and len({g[2], g[3], g[7]}) == 3
     assert set(g[[0, 4]]).isdisjoint(g[[2, 3, 7]])
+    g = segments([False, False, True, True, False])  # "−1 where False": negative, each its own
+    assert (g[[0, 1, 4]] < 0).all() and len(set(g[[0, 1, 4]])) == 3 and g[2] == g[3] >= 0
     # used as groups, no difference spans a gap
     r = np.arange(8.0) ** 2
     np.testing.assert_array_equal(second_differences(r, g, centres=True)[1], [5])
