@@ -61,8 +61,8 @@ def test_segments_number_the_runs_and_isolate_each_gap():
     assert g[0] == g[1] and g[4] == g[5] == g[6] and g[0] != g[4] and g[0] >= 0
     assert g[2] < 0 and g[3] < 0 and g[7] < 0 and len({g[2], g[3], g[7]}) == 3
     assert set(g[[0, 4]]).isdisjoint(g[[2, 3, 7]])
-    g = segments([False, False, True, True, False])  # "−1 where False": negative, each its own
-    assert (g[[0, 1, 4]] < 0).all() and len(set(g[[0, 1, 4]])) == 3 and g[2] == g[3] >= 0
+    h = segments([False, False, True, True, False])  # "−1 where False": negative, each its own
+    assert (h[[0, 1, 4]] < 0).all() and len(set(h[[0, 1, 4]])) == 3 and h[2] == h[3] >= 0
     # used as groups, no difference spans a gap
     r = np.arange(8.0) ** 2
     np.testing.assert_array_equal(second_differences(r, g, centres=True)[1], [5])
