@@ -17,6 +17,8 @@ def test_second_differences_by_hand_and_within_groups():
     d2, centres = second_differences(r, groups=[0, 0, 0, 1, 1, 1], centres=True)
     np.testing.assert_array_equal(d2, [2.0, -4.0])
     np.testing.assert_array_equal(centres, [1, 4])
+    for labels in ([1, 1, 1, 0, 0, 0], [5, 5, 5, 7, 7, 7]):  # any labels, any order
+        np.testing.assert_array_equal(second_differences(r, labels, centres=True)[1], [1, 4])
     # a NaN sample drops the three differences it is in
     d2, centres = second_differences([0.0, 1.0, np.nan, 9.0, 16.0, 25.0, 36.0], centres=True)
     np.testing.assert_array_equal(centres, [4, 5])
