@@ -234,10 +234,13 @@ def test_ar_order_and_coefficients_are_statsmodels_at_any_scale():
     assert ar_select_order(r, maxlag=15, ic="aic", trend="n").ar_lags == [1, 2, 3]
     a = AutoReg(r, lags=3, trend="n", hold_back=15).fit().params
     want = _reference_sandwich(J, [_whitened(J, r, a)])
+    details = sandwich(J, r)[1]
     for scale in (1e-3, 1.0, 1e3):
         cov, info = sandwich(J, scale * r)
         assert info["ar_order"] == 3 and info["ar_sum"] == pytest.approx(a.sum(), rel=1e-9)
         np.testing.assert_allclose(cov, scale ** 2 * want, rtol=1e-9)
+        assert info["dof_eff"] == pytest.approx(details["dof_eff"], rel=1e-9)
+        assert info["rho1"] == pytest.approx(details["rho1"], rel=1e-9)
 
 
 def test_white_residuals_give_the_heteroskedasticity_consistent_sandwich():
@@ -292,3 +295,28 @@ def test_ar_order_is_statsmodels_aic_choice_on_forty_records():
             for x in records]
     assert len(set(want)) >= 5
     assert [_autoregression([x], 2)[1] for x in records] == want
+
+
+def test_intervals_keep_at_least_one_degree_of_freedom():
+    """Three points and two parameters: one degree of freedom, s² = rᵀr/1, t(1) = 12.71;
+    two points: a zero residual, still one (not 0, not a division by zero); residuals
+    like a random walk (effective dof 1.1 − 2 parameters): one."""
+    from scipy import stats
+
+    from pneunet.truth.intervals import intervals
+
+    J = np.array([[1.0, 0.0], [1.0, 1.0], [1.0, 2.0]])
+    r = np.array([0.5, -1.0, 0.5])
+    ci, se, info = intervals(np.zeros(2), J, r, ["a", "b"], log=False)
+    assert info["dof"] == 1.0 and info["s"] == pytest.approx(np.sqrt(1.5), rel=1e-12)
+    want = np.sqrt(1.5 * np.linalg.inv(J.T @ J)[0, 0])
+    assert ci["a"] == pytest.approx((-12.7062 * want, 12.7062 * want), rel=1e-5)
+    ci, se, info = intervals(np.ones(2), J[:2], np.zeros(2), ["a", "b"], log=False)
+    assert info["dof"] == 1.0 and ci["a"] == (1.0, 1.0)
+    n = 200
+    t = np.linspace(0.0, 6.0, n)
+    J = np.column_stack([np.exp(-t / 2), t * np.exp(-t / 2)])
+    walk = np.cumsum(np.random.default_rng(1).standard_normal(n))
+    ci, se, info = intervals(np.zeros(2), J, walk, ["a", "b"], log=False)
+    assert info["method"] == "hac" and info["dof_eff"] < 3 and info["dof"] == 1.0
+    assert ci["b"][1] == pytest.approx(stats.t.ppf(0.975, 1) * se["b"], rel=1e-12)
