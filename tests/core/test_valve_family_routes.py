@@ -1,0 +1,111 @@
+"""The valve element family on its vectorised route, against the paper's equations
+(tests/reference_valve.py) and a user's flow model written here: six-parameter valves
+with and without backward parameters next to user models in one family, the flows and
+partials at one time, the flows over a history, and the recorded signals (issue 39:
+mutants of elements/valves.py in the user-model and history paths survived)."""
+import numpy as np
+import pytest
+
+from pneunet import elements
+from pneunet.elements.base import ElementSpec, FamilyContext
+from pneunet.engine.options import SimulationOptions
+from pneunet.valve_params import PAPER_VALVES, ValveParams
+import reference_valve as ref  # tests/ is on pytest's sys.path
+
+AXI = PAPER_VALVES["axi"].as_dict()
+BACKWARD = ValveParams(Rf=0.9, pclose=60.0, ptrans=150.0, e=1.8, ain=0.7, aout=0.4)
+
+
+class Orifice:
+    """A user's valve model: ṁ = (p_in² − p_out²)·(1 + p_ctrl/1000)/R₀ (mg/s), smooth,
+    with its exact partials for the test."""
+
+    R0 = 400.0
+
+    def flow(self, p_in, p_out, p_ctrl):
+        return (p_in ** 2 - p_out ** 2) * (1 + p_ctrl / 1000) / self.R0
+
+    def partials(self, p_in, p_out, p_ctrl):
+        k = (1 + p_ctrl / 1000) / self.R0
+        return 2 * p_in * k, -2 * p_out * k, (p_in ** 2 - p_out ** 2) / (1000 * self.R0)
+
+
+USER = Orifice()
+#: instance i: axi, axi with backward parameters, the user's model (cycled: 12 valves)
+MODELS = [("axi", False), ("axi", BACKWARD), (USER, False)] * 4
+
+
+def _family():
+    specs = [ElementSpec("valve", f"X{i}", ("a", "b", "c"), {"model": m, "backward": b})
+             for i, (m, b) in enumerate(MODELS)]
+    cls = elements.family("valve")
+    for s in specs:
+        cls.check_spec(s)
+    return cls(specs, FamilyContext(SimulationOptions()))
+
+
+def _band_flow(p_in, p_out, p_ctrl, params):
+    """Eq. 19 with eq. 25 and the circuits' flow band (10 kPa²) on the root."""
+    dp = ref.delta_p(p_in, p_out, p_ctrl, params["ain"], params["aout"])
+    if dp <= params["pclose"]:
+        return 0.0
+    u = (dp - params["pclose"]) / (params["ptrans"] - params["pclose"])
+    d = p_in ** 2 - p_out ** 2
+    return d / (d * d + 100.0) ** 0.25 / (params["Rf"] * np.sqrt(1 + u ** (-2 * params["e"])))
+
+
+def _want(i, x):
+    model, backward = MODELS[i]
+    if model is USER:
+        return USER.flow(*x)
+    params = backward.as_dict() if backward and x[1] > x[0] else AXI
+    return _band_flow(*x, params)
+
+
+def _pressures(rng, n):
+    p = np.column_stack([rng.uniform(150, 500, n), rng.uniform(100, 450, n),
+                         rng.uniform(96, 200, n)])
+    p[1::2, :2] = p[1::2, 1::-1]  # every other valve flows backward
+    return p
+
+
+def test_mixed_family_flows_and_partials_at_one_time():
+    fam = _family()
+    p = _pressures(np.random.default_rng(0), len(MODELS))
+    q, dq, _ = fam.outflows(0.0, p, None)
+    want = np.array([_want(i, x) for i, x in enumerate(p)])
+    assert (want[2::3] != 0).all() and (want[:2] != 0).any()
+    np.testing.assert_allclose(q[:, 0], want, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(q[:, 1], -want, rtol=1e-9, atol=1e-12)
+    assert not q[:, 2].any() and not dq[:, 2].any()  # nothing flows at the control port
+    for i, x in enumerate(p):
+        if MODELS[i][0] is USER:
+            exact = USER.partials(*x)
+        else:
+            h = 1e-4
+            exact = [(_want(i, x + h * e) - _want(i, x - h * e)) / (2 * h) for e in np.eye(3)]
+        np.testing.assert_allclose(dq[i, 0], exact, rtol=1e-7, atol=1e-9, err_msg=str(i))
+        np.testing.assert_allclose(dq[i, 1], -np.asarray(exact), rtol=1e-7, atol=1e-9)
+    np.testing.assert_allclose(fam.flows(0.0, p, None), q, rtol=1e-13, atol=1e-13)
+
+
+def test_mixed_family_flows_over_a_history_and_its_signals():
+    fam = _family()
+    rng = np.random.default_rng(1)
+    history = np.array([_pressures(rng, len(MODELS)) for _ in range(5)])  # (time, valve, port)
+    flows = fam.flows(np.arange(5.0), history, None)
+    assert flows.shape == (5, len(MODELS), 3)
+    for k, p in enumerate(history):
+        want = [_want(i, x) for i, x in enumerate(p)]
+        np.testing.assert_allclose(flows[k, :, 0], want, rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose(flows[k, :, 1], -np.array(want), rtol=1e-9, atol=1e-12)
+    sig = fam.signals(0.0, history[0])
+    p = history[0]
+    analytic = [i for i, (m, _) in enumerate(MODELS) if m is not USER]
+    dp = np.array([ref.delta_p(*p[i], AXI["ain"], AXI["aout"]) for i in analytic])
+    assert sig["dp"][0] == "kPa"
+    np.testing.assert_allclose(sig["dp"][1][analytic], dp, rtol=1e-12)
+    np.testing.assert_allclose(sig["opening"][1][analytic],
+                               np.maximum(dp - AXI["pclose"], 0) / (AXI["ptrans"] - AXI["pclose"]),
+                               rtol=1e-12)
+    np.testing.assert_allclose(sig["mdot"][1], flows[0, :, 0], rtol=1e-13)
