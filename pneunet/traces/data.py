@@ -1,12 +1,76 @@
-"""Recorded circuit transients (time_s, p_<node>_kPa, mdot_<element>_mg_s): reading
-with checks that name the file, the column and what to do; which samples are compared
-(jumping signals); the split into fitted and held-out cycles."""
+"""Recorded circuit transients (time_s, p_<node>_kPa, mdot_<element>_mg_s and every other
+signal ``pneunet run`` writes, contraction_<muscle>_mm …): reading with checks that name
+the file, the column and what to do; which samples are compared (jumping signals); the
+split into fitted and held-out cycles."""
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 
 from ..csvdata import TRACE_MAX_ROWS, column_unit, missing_column, nonfinite_rows, open_csv
 from ..errors import DataError
+
+#: element signals besides pressures and flows (the columns ``pneunet run`` writes,
+#: ``<quantity>_<element>_<unit>``), by quantity: the unit slot of :mod:`pneunet.units`
+#: (its unit is the signal's); the dimensionless ones have no unit suffix
+ELEMENT_SIGNALS = {"contraction": "length", "force": "force", "volume": "volume",
+                   "T": "temperature", "dp": "pressure_difference",
+                   "opening": "dimensionless", "Re": "dimensionless"}
+
+
+@dataclass(frozen=True)
+class ElementColumn:
+    """A column of an element signal read as quantity slot, stem and unit:
+    ``contraction_M1_cm`` → length, ``contraction_M1``, ``cm`` (canonical
+    ``contraction_M1_mm``)."""
+
+    kind: str  # the unit slot
+    stem: str
+    unit: str
+    gauge: bool = False
+
+    @property
+    def canonical(self) -> str:
+        from ..units import SLOTS
+
+        return f"{self.stem}_{SLOTS[self.kind]}" if SLOTS[self.kind] else self.stem
+
+    @property
+    def pint_unit(self) -> str:
+        return self.unit
+
+    @property
+    def is_canonical(self) -> bool:
+        from ..units import SLOTS
+
+        return self.unit == SLOTS[self.kind]
+
+
+def element_column(name: str) -> ElementColumn | None:
+    """An element signal's column (see :data:`ELEMENT_SIGNALS`) read, else None; a
+    DataError naming the column for a missing unit or one of another quantity."""
+    from ..errors import ParameterError
+    from ..units import SLOTS, example, to_internal
+
+    quantity, _, rest = name.partition("_")
+    slot = ELEMENT_SIGNALS.get(quantity)
+    if slot is None or not rest:
+        return None
+    if slot == "dimensionless":
+        return ElementColumn(slot, name, "")
+    element, _, unit = rest.rpartition("_")
+    if not element or not unit:
+        raise DataError(f"column {name}: a {slot.replace('_', ' ')} needs its unit",
+                        hint=f"name it {name}_{SLOTS[slot]} (or another {slot} unit, "
+                             f"e.g. {example(slot)})")
+    try:
+        to_internal(np.ones(1), unit, slot, name=name)
+    except ParameterError as err:
+        raise DataError(f"column {name}: {unit!r} is not a {slot.replace('_', ' ')} unit",
+                        hint=f"{err.message}; e.g. {quantity}_{element}_{SLOTS[slot]}") \
+            from None
+    return ElementColumn(slot, f"{quantity}_{element}", unit)
 
 #: a sample step larger than this fraction of the signal's range (and than 8 typical
 #: steps) is a jump of an algebraic node (p_out at a fold)
@@ -87,7 +151,7 @@ def _plan(columns, signals, where, notes):
     rename, units, other = {}, {}, []
     for name in map(str, columns):
         try:
-            cu = column_unit(name)
+            cu = column_unit(name) or element_column(name)
         except DataError as err:
             raise DataError(err.message, where=where, hint=err.hint) from None
         if cu is None or cu.stem in ("p", "mdot"):
@@ -110,7 +174,8 @@ def _plan(columns, signals, where, notes):
                              hint="rename the time column to time_s (seconds)")
     known = [c for c in units if c != "time_s"]
     if not known:
-        raise DataError("no signal columns named p_<node>_kPa or mdot_<element>_mg_s",
+        raise DataError("no signal columns named p_<node>_kPa, mdot_<element>_mg_s or "
+                        "another signal pneunet run writes (contraction_<muscle>_mm …)",
                         where=where, hint="columns found: " + ", ".join(map(str, columns)))
     if signals:
         chosen = [rename.get(s, s) for s in signals]
@@ -120,10 +185,11 @@ def _plan(columns, signals, where, notes):
                                      + ", ".join(known))
         return rename, {c: units[c] for c in ["time_s"] + chosen}
     if other:
-        raise DataError(f"column {other[0]} is not a signal (p_<node>_<pressure unit> or "
-                        f"mdot_<element>_<flow unit>)", where=where,
-                        hint="rename it (units: kPa, bar, psi, Pa, MPa; mg_s, g_s, L_min), "
-                             "delete it, or pick the fitted columns with --signal")
+        raise DataError(f"column {other[0]} is not a signal (p_<node>_<pressure unit>, "
+                        f"mdot_<element>_<flow unit> or <quantity>_<element>_<unit> with a "
+                        f"quantity of {', '.join(ELEMENT_SIGNALS)})", where=where,
+                        hint="rename it (units: kPa, bar, psi, Pa, MPa; mg_s, g_s, L_min; mm, "
+                             "N, mL, K), delete it, or pick the fitted columns with --signal")
     return rename, {"time_s": units["time_s"], **{c: units[c] for c in known}}
 
 
@@ -169,12 +235,30 @@ def _check_values(df, columns, where, names) -> None:
 
 
 def signal_of_column(col: str) -> str:
-    """``p_tank_kPa`` → ``p_tank`` (the Solution signal name)."""
+    """``p_tank_kPa`` → ``p_tank``, ``contraction_M1_mm`` → ``contraction_M1`` (the
+    Solution signal name of a canonical column)."""
+    from ..units import SLOTS
+
     if col.endswith("_kPa"):
         return col[:-4]
     if col.endswith("_mg_s"):
         return col[:-5]
+    unit = SLOTS.get(ELEMENT_SIGNALS.get(col.partition("_")[0], ""), "")
+    if unit and col.endswith("_" + unit):
+        return col[:-len(unit) - 1]
     return col
+
+
+def signal_unit(signal: str) -> str:
+    """The unit of a Solution signal name (``p_tank`` kPa, ``mdot_R1`` mg/s,
+    ``contraction_M1`` mm, ``opening_X1`` '')."""
+    from ..units import SLOTS
+
+    if signal.startswith("p_"):
+        return "kPa"
+    if signal.startswith("mdot_"):
+        return "mg/s"
+    return SLOTS.get(ELEMENT_SIGNALS.get(signal.partition("_")[0], ""), "")
 
 
 def jump_samples(y) -> np.ndarray:

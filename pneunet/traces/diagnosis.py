@@ -28,11 +28,11 @@ from ..truth.lsq import evaluate_many
 from ..truth.noise import difference_sigma, segments
 from ..truth.verdict import TOLERANCE, Step, at_floor, decide
 from ..truth.waterfall import Waterfall
-from .data import read_trace, signal_of_column, split_by_cycles
+from .data import (compared_samples, read_trace, signal_of_column, signal_unit,
+                   split_by_cycles)
 from .effects import candidates_for
 from .fit import TraceFit, fit_trace
 from .model import FIT_OPTIONS, TraceModel, TraceResidual
-from .data import compared_samples
 
 
 @dataclass(repr=False)
@@ -52,6 +52,7 @@ class TraceDiagnosis(Summarized):
     test_window: tuple
     timing: dict = field(default_factory=dict)
     notes: list = field(default_factory=list)
+    signals: dict = field(default_factory=dict)  # per signal, in its unit: signal_table
 
     def _summary(self):
         rows = [("accepted", listed(self.accepted) or "nothing"),
@@ -77,7 +78,10 @@ class TraceDiagnosis(Summarized):
                 "base_fit": self.base.as_dict(), "waterfall": self.waterfall.to_json(),
                 "where": list(self.where), "noise": self.noise,
                 "train_window": list(self.train_window), "test_window": list(self.test_window),
-                "timing": self.timing, "notes": list(self.notes)}
+                "timing": self.timing, "notes": list(self.notes),
+                "signals": {k: {f: v if f in ("unit", "at_floor") else _num(v)
+                                for f, v in row.items()}
+                            for k, row in self.signals.items()}}
 
     def report(self) -> str:
         from .report import format_report
@@ -120,6 +124,21 @@ def noise_floor(fit: TraceFit) -> dict:
                       "the whole record (jump samples left out), pooled rms"}
 
 
+def signal_table(base: TraceFit, final: TraceFit, test, noise: dict,
+                 tolerance: float = TOLERANCE) -> dict:
+    """Per signal, in its own unit: the noise floor, the held-out rms of the base and
+    the final model, the final's ratio to the floor and whether that is within
+    ``tolerance`` (the signal's own verdict on the final model)."""
+    held_base, held = base.errors_by_signal(test), final.errors_by_signal(test)
+    out = {}
+    for s in final.signals():
+        floor = noise["per_signal"].get(s, math.nan) * final.scales.get(s, 1.0)
+        out[s] = {"unit": signal_unit(s), "noise_floor": floor, "base_held_out": held_base[s],
+                  "held_out": held[s], "ratio_to_floor": held[s] / floor if floor else math.nan,
+                  "at_floor": bool(at_floor(held[s], floor, tolerance))}
+    return out
+
+
 def locate(fit: TraceFit, test_window, floor: float, data_frame, node: str) -> list[str]:
     """Plain-language places where ``fit``'s held-out residual exceeds the floor."""
     r = fit.residuals
@@ -152,7 +171,8 @@ def locate(fit: TraceFit, test_window, floor: float, data_frame, node: str) -> l
         else:
             shift = (f"the recording {'lags' if lag > 0 else 'leads'} the model by "
                      f"{abs(lag):.3g} s there")
-        findings.append(f"{s}: held-out rms {rms:.3g} {fit.unit} ({rms / floor:.1f}× the noise "
+        own = f"{rms * fit.scales.get(s, 1.0):.3g} {signal_unit(s)}".rstrip()
+        findings.append(f"{s}: held-out rms {own} ({rms / floor:.1f}× the noise "
                         f"floor), largest at cycle phase {where} (0 = rising through mid-range "
                         f"of p_{node}); {shift}")
     return findings
@@ -174,7 +194,8 @@ class _ScreenTask:
         eff = self.effect
         names = self.names + list(eff.params)
         theta = np.log([self.point[k] for k in eff.params])
-        model = TraceModel(*self.model_args[0], effects=(eff,), **self.model_args[1])
+        model = TraceModel(*self.model_args[0], effects=(eff,), budget=SCREEN_BUDGET,
+                           **self.model_args[1])
         fun = TraceResidual(model, names, *self.data)
         xb, limit = self._recentred(model, names, theta), SCREEN_STEP
         if model.failures:  # a point the circuit cannot be simulated at: no more time on it
@@ -233,6 +254,10 @@ SCREEN_KEEP = 2.25
 #: largest change of a base parameter (ln value) in one screening step, and the steps
 SCREEN_STEP = 0.25
 SCREEN_STEPS = 1
+#: a screening point's simulation budget, (× the base fit's typical simulation, at
+#: least s): a point that makes the circuit this much stiffer (a long thin tube with no
+#: volume) is a failed point, as it would be in a fit, not seconds lost
+SCREEN_BUDGET = (5.0, 1.0)
 
 
 def _run_task(task):
@@ -403,7 +428,8 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
         + sum(st["simulations"] or 0 for tried in fitting.starts.values() for st in tried)
     wf = Waterfall(steps, floor, unit)
     return TraceDiagnosis(verdict, accepted, floor, unit, ranking, fits, wf, where_txt,
-                          {k: v for k, v in noise.items()}, train, test, timing, notes)
+                          {k: v for k, v in noise.items()}, train, test, timing, notes,
+                          signal_table(base, final, test, noise, tolerance))
 
 
 class _Fitting:

@@ -5,8 +5,8 @@ of circuit effects) are varied in log space within bounds until the simulated si
 match the recorded ones at the recorded times, on a fit window (the first cycles).
 Every recorded column is compared; around the jumps of an algebraic node (p_out at a
 fold) a few samples are left out (:func:`~pneunet.traces.data.compared_samples`).
-Intervals come from :func:`pneunet.truth.intervals.intervals` (white residuals, or
-Newey–West and why).  The solution over the whole record gives the held-out error.
+Intervals come from :func:`pneunet.truth.intervals.intervals` (white residuals, or a
+sandwich through an AR model of autocorrelated ones, and why).  The solution over the whole record gives the held-out error.
 """
 from __future__ import annotations
 
@@ -21,8 +21,9 @@ from ..errors import DataError, ParameterError, PneunetError
 from ..reprs import Summarized, listed, number
 from ..truth.intervals import intervals
 from ..truth.lsq import least_squares_log
+from ..truth.noise import record_sigma, segments
 from .align import Alignment
-from .data import compared_samples, read_trace, signal_of_column, swings
+from .data import compared_samples, read_trace, signal_of_column, signal_unit, swings
 from .initial_state import StartState, choose_start
 from .model import DIFF_STEP, FIT_OPTIONS, TraceModel, TraceResidual, sample_at
 
@@ -32,12 +33,12 @@ class TraceFit(Summarized):
     """Result of :func:`fit_trace`.
 
     ``values``, ``ci`` ({name: (low, high)}), ``stderr_log`` (standard error of ln
-    value), ``rmse`` per signal in the fit window (kPa or mg/s, compared samples),
+    value), ``rmse`` per signal in the fit window (its own unit, compared samples),
     ``residuals`` (DataFrame: time_s, phase, fitted, one column per signal, NaN where
     not compared), ``phase_rms`` (phase bin centre, rms per signal),
     ``period_measured``/``period_simulated``/``period_error`` (s, at ``node``),
-    ``unit`` ('kPa' or '% of range') and ``scales`` (signal → divisor giving that
-    unit), ``solution`` (the simulation with the estimates over the whole record).
+    ``unit`` ('kPa', or :data:`NOISE_UNIT` for signals of several units) and ``scales``
+    (signal → divisor giving that unit), ``solution`` (the simulation with the estimates over the whole record).
     """
 
     values: dict
@@ -85,6 +86,19 @@ class TraceFit(Summarized):
         v = v[np.isfinite(v)]
         return float(np.sqrt(np.mean(v ** 2))) if v.size else float("nan")
 
+    def errors_by_signal(self, window=None) -> dict:
+        """{signal: rms residual in the signal's own unit} on the compared samples in
+        ``window`` (default: the fit window)."""
+        r = self.residuals
+        t = r["time_s"].to_numpy()
+        sel = r["fitted"].to_numpy() if window is None else (t >= window[0]) & (t <= window[1])
+        out = {}
+        for s in self.signals():
+            v = r[s].to_numpy()[sel]
+            v = v[np.isfinite(v)]
+            out[s] = float(np.sqrt(np.mean(v ** 2))) if v.size else float("nan")
+        return out
+
     def as_dict(self) -> dict:
         return {"values": self.values, "ci": {k: list(v) for k, v in self.ci.items()},
                 "rmse": self.rmse, "period_measured": self.period_measured,
@@ -115,7 +129,8 @@ class TraceFit(Summarized):
         for k, v in self.values.items():
             lo, hi = self.ci[k]
             lines.append(f"  {k:<14} {v:>10.5g}   [{lo:.5g}, {hi:.5g}]")
-        lines.append("rms residual: " + ", ".join(f"{k} {v:.3g}" for k, v in self.rmse.items()))
+        lines.append("rms residual: " + ", ".join(f"{k} {v:.3g} {signal_unit(k)}".rstrip()
+                                                  for k, v in self.rmse.items()))
         if math.isfinite(self.period_error):
             lines.append(f"period: measured {self.period_measured:.4g} s, simulated "
                          f"{self.period_simulated:.4g} s, error {self.period_error:+.3g} s")
@@ -170,7 +185,7 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
     Two stages: with ``features`` and an oscillating record at ``node``, starting
     values from the cycle (:mod:`pneunet.traces.start`); then Levenberg–Marquardt on
     the samples in ln-parameters.  Signals are compared in kPa when all are pressures,
-    else in % of each signal's range.
+    else each in units of its own noise (:func:`residual_scales`).
     """
     from ..analysis.sweep import require_builder
     from .start import _feature_fit, initial_values
@@ -203,9 +218,8 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
     x0 = np.log([params[k][0] for k in names])
     lb = np.log([params[k][1] for k in names])
     ub = np.log([params[k][2] for k in names])
-    unit = "kPa" if all(s.startswith("p_") for s in sigs) else "% of range"
-    scales = {s: 1.0 if unit == "kPa" else max(np.ptp(meas[s]), 1e-9) / 100.0 for s in sigs}
     keep_all = {s: compared_samples(meas[s]) for s in sigs}
+    unit, scales = residual_scales(meas, keep_all)
     t_fit = times[mask]
     node = node or next((s[2:] for s in sigs if s.startswith("p_")), None)
     aligned = None
@@ -276,10 +290,35 @@ def settling_time(state, times, y) -> float:
     return float(rising_crossings(times, y)[0])
 
 
+#: the pooled unit of signals in different units: each signal's residual divided by its
+#: own noise (robust second differences of the recorded column)
+NOISE_UNIT = "× noise"
+
+
+def residual_scales(measured: dict, keep: dict) -> tuple[str, dict]:
+    """(unit, {signal: divisor}) of the compared residuals: kPa when every signal is a
+    pressure, else each signal in units of its own noise (σ of its recorded column's
+    fourth differences over the compared runs, :func:`~pneunet.truth.noise.record_sigma`;
+    where a column shows none, 1e-6 of its range), so that a contraction in mm and a
+    pressure in kPa weigh as their noise says."""
+    if all(s.startswith("p_") for s in measured):
+        return "kPa", dict.fromkeys(measured, 1.0)
+    scales = {}
+    for s, y in measured.items():
+        sigma = record_sigma(y, segments(keep[s]))
+        floor = 1e-6 * max(float(np.ptp(y)), 1e-12)
+        scales[s] = sigma if math.isfinite(sigma) and sigma > floor else floor
+    return NOISE_UNIT, scales
+
+
 def check_signals(model: TraceModel, values: dict, columns, where: str) -> None:
-    """DataError when a recorded column names a node or element the circuit lacks."""
+    """DataError when a recorded column names a node or element the circuit lacks, or a
+    signal its element does not have (listing the columns ``pneunet run`` would write)."""
+    from ..engine.solution import column_name
+
     c = model.circuit(values)
     nodes, elements = set(c.nodes), set(c.elements)
+    others = []
     for col in columns:
         sig = signal_of_column(col)
         if sig.startswith("p_") and sig[2:] not in nodes:
@@ -289,6 +328,29 @@ def check_signals(model: TraceModel, values: dict, columns, where: str) -> None:
         if sig.startswith("mdot_") and sig[5:] not in elements:
             raise DataError(f"column {col}: the circuit has no element {sig[5:]!r}",
                             where=where, hint="elements: " + ", ".join(sorted(elements)))
+        if not sig.startswith(("p_", "mdot_")):
+            others.append(col)
+    if not others:
+        return
+    import warnings
+
+    with warnings.catch_warnings():  # a probe of a few steps: nothing worth a warning
+        warnings.simplefilter("ignore")
+        sol = c.tran(SIGNAL_PROBE_S)  # which signals the circuit's elements write
+    has = {column_name(k, u) for k, u in sol.units.items()}
+    for col in others:
+        if col not in has:
+            quantity, _, element = signal_of_column(col).partition("_")
+            what = (f"element {element} has no {quantity} signal" if element in elements
+                    else f"the circuit has no element {element!r}")
+            raise DataError(f"column {col}: {what}", where=where,
+                            hint="signals of this circuit besides pressures and flows: "
+                                 + (", ".join(sorted(h for h in has if not h.startswith(
+                                     ("p_", "mdot_")))) or "none"))
+
+
+#: simulated time (s) of the probe that lists a circuit's signals
+SIGNAL_PROBE_S = 1e-3
 
 
 def period_error(times, ref, sol, node, mask, first_time: float = 0.0):

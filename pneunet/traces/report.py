@@ -32,6 +32,13 @@ def format_report(d) -> str:
         par = ", ".join(f"{k}={v:.4g} [{r['ci'][k][0]:.3g}, {r['ci'][k][1]:.3g}]"
                         for k, v in r["values"].items())
         L.append(f"    {r['effect']:<26}{r['held_out_rms']:10.3g}{r['ratio_to_floor']:9.2f}  {par}")
+    if len(d.signals) > 1 or d.unit != "kPa":
+        L.append("[[Per signal]] (held-out rms in each signal's unit)")
+        L.append(f"    {'signal':<22}{'floor':>10}{'base':>10}{'final':>10}{'× floor':>9}")
+        for s, row in d.signals.items():
+            L.append(f"    {s:<22}{row['noise_floor']:10.3g}{row['base_held_out']:10.3g}"
+                     f"{row['held_out']:10.3g}{row['ratio_to_floor']:9.2f}  {row['unit']:<4}"
+                     + ("" if row["at_floor"] else " above its floor"))
     if d.where:
         L.append("[[Where the model fails]]")
         L += [f"    - {w}" for w in d.where]
