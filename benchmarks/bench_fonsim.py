@@ -58,6 +58,16 @@ def pneunet_chain(n, t_stop=2.0, rtol=1e-5):
                             for k in range(1, n + 1)]), seconds
 
 
+def _run_quietly(fons, system, t_stop, step):
+    """(FONSim simulation run for ``t_stop`` s with its (min, max) ``step``, wall s of
+    the run alone), FONSim's progress printing swallowed."""
+    with contextlib.redirect_stdout(io.StringIO()):
+        sim = fons.Simulation(system, duration=t_stop, step=step)
+        start = time.perf_counter()
+        sim.run()
+        return sim, time.perf_counter() - start
+
+
 def fonsim_chain(n, t_stop=2.0):
     """FONSim: (every container's pressure on GRID (n_t, n) in kPa, seconds), or None."""
     try:
@@ -73,11 +83,7 @@ def fonsim_chain(n, t_stop=2.0):
     for k in range(1, n):
         system.connect_common(f"r{k}", f"c{k}", f"r{k + 1}")
     system.connect(f"r{n}", f"c{n}")
-    with contextlib.redirect_stdout(io.StringIO()):
-        sim = fons.Simulation(system, duration=t_stop, step=(1e-4, 1e-2))
-        start = time.perf_counter()
-        sim.run()
-        seconds = time.perf_counter() - start
+    sim, seconds = _run_quietly(fons, system, t_stop, (1e-4, 1e-2))
     grid = GRID[GRID <= t_stop]
     return np.column_stack([np.interp(grid, sim.times, system.get(f"c{k}").get("pressure") / 1e3)
                             for k in range(1, n + 1)]), seconds
@@ -151,11 +157,7 @@ def fonsim_oscillator(t_stop):
     system.connect_common("X1", "Vout", "Rout")
     system.connect_common("Rout", "tank", "Rvent", "X1")
     system.connect("Rvent", "low")
-    with contextlib.redirect_stdout(io.StringIO()):
-        sim = fons.Simulation(system, duration=t_stop, step=(1e-5, 1e-2))
-        start = time.perf_counter()
-        sim.run()
-        seconds = time.perf_counter() - start
+    sim, seconds = _run_quietly(fons, system, t_stop, (1e-5, 1e-2))
     return analyze_oscillation(sim.times, system.get("tank").get("pressure") / 1e3), seconds
 
 
@@ -211,11 +213,7 @@ def fonsim_water():
     system.connect("src", "tube")
     system.connect("a0", "tube")
     system.connect(("a0", "a"), ("a1", "a"))
-    with contextlib.redirect_stdout(io.StringIO()):
-        sim = fons.Simulation(system, duration=1.0, step=(1e-4, 1e-2))
-        start = time.perf_counter()
-        sim.run()
-        seconds = time.perf_counter() - start
+    sim, seconds = _run_quietly(fons, system, 1.0, (1e-4, 1e-2))
     p = system.get("a0").get("pressure")
     return np.interp(GRID[GRID <= 1.0], sim.times, p / 1e3) - fons.cnorm.pressure_atmospheric / 1e3, \
         seconds
@@ -277,11 +275,7 @@ def fonsim_balloon(t_stop=8.0):
                fons.FreeActuator("b", fluid=fons.air))
     system.connect("src", "r")
     system.connect("r", "b")
-    with contextlib.redirect_stdout(io.StringIO()):
-        sim = fons.Simulation(system, duration=t_stop, step=(1e-4, 1e-2))
-        start = time.perf_counter()
-        sim.run()
-        seconds = time.perf_counter() - start
+    sim, seconds = _run_quietly(fons, system, t_stop, (1e-4, 1e-2))
     mass = system.get("b").get_state("mass")
     p = system.get("b").get("pressure", "a")
     v = mass / fons.air.rho_stp * atm / p * 1e6  # mL
