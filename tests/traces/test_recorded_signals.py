@@ -105,7 +105,6 @@ def test_each_signal_is_weighted_by_its_own_noise():
     assert residual_scales({"p_tank": meas["p_tank"]}, keep) == ("kPa", {"p_tank": 1.0})
 
 
-@pytest.mark.study  # the stand-alone rig and the fit: ~40 s
 def test_per_signal_table_gives_each_floor_and_verdict_in_the_signals_own_unit():
     """The pooled floor is in noise units; the table multiplies back: a contraction whose
     scale is 0.05 mm and whose residual floor is 1.1 noise units has a 0.055 mm floor."""
