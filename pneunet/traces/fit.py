@@ -6,7 +6,8 @@ match the recorded ones at the recorded times, on a fit window (the first cycles
 Every recorded column is compared; around the jumps of an algebraic node (p_out at a
 fold) a few samples are left out (:func:`~pneunet.traces.data.compared_samples`).
 Intervals come from :func:`pneunet.truth.intervals.intervals` (white residuals, or a
-sandwich through an AR model of autocorrelated ones, and why).  The solution over the whole record gives the held-out error.
+sandwich through an AR model of autocorrelated ones, and why).  The solution over the
+whole record gives the held-out error.
 """
 from __future__ import annotations
 
@@ -38,7 +39,8 @@ class TraceFit(Summarized):
     not compared), ``phase_rms`` (phase bin centre, rms per signal),
     ``period_measured``/``period_simulated``/``period_error`` (s, at ``node``),
     ``unit`` ('kPa', or :data:`NOISE_UNIT` for signals of several units) and ``scales``
-    (signal → divisor giving that unit), ``solution`` (the simulation with the estimates over the whole record).
+    (signal → divisor giving that unit), ``solution`` (the simulation with the
+    estimates over the whole record).
     """
 
     values: dict
@@ -75,29 +77,27 @@ class TraceFit(Summarized):
     def signals(self) -> list[str]:
         return [c for c in self.residuals.columns if c not in ("time_s", "phase", "fitted")]
 
+    def _in(self, window):
+        """Mask of the residual rows in ``window`` (default: the fit window)."""
+        r = self.residuals
+        if window is None:
+            return r["fitted"].to_numpy()
+        t = r["time_s"].to_numpy()
+        return (t >= window[0]) & (t <= window[1])
+
     def error(self, window=None) -> float:
         """Pooled rms of the scaled residuals (in ``unit``) on the compared samples in
         ``window`` (default: the fit window)."""
-        r = self.residuals
-        t = r["time_s"].to_numpy()
-        sel = r["fitted"].to_numpy() if window is None else (t >= window[0]) & (t <= window[1])
-        parts = [r[s].to_numpy()[sel] / self.scales.get(s, 1.0) for s in self.signals()]
-        v = np.concatenate(parts)
-        v = v[np.isfinite(v)]
-        return float(np.sqrt(np.mean(v ** 2))) if v.size else float("nan")
+        sel = self._in(window)
+        parts = [self.residuals[s].to_numpy()[sel] / self.scales.get(s, 1.0)
+                 for s in self.signals()]
+        return _rms(np.concatenate(parts))
 
     def errors_by_signal(self, window=None) -> dict:
         """{signal: rms residual in the signal's own unit} on the compared samples in
         ``window`` (default: the fit window)."""
-        r = self.residuals
-        t = r["time_s"].to_numpy()
-        sel = r["fitted"].to_numpy() if window is None else (t >= window[0]) & (t <= window[1])
-        out = {}
-        for s in self.signals():
-            v = r[s].to_numpy()[sel]
-            v = v[np.isfinite(v)]
-            out[s] = float(np.sqrt(np.mean(v ** 2))) if v.size else float("nan")
-        return out
+        sel = self._in(window)
+        return {s: _rms(self.residuals[s].to_numpy()[sel]) for s in self.signals()}
 
     def as_dict(self) -> dict:
         return {"values": self.values, "ci": {k: list(v) for k, v in self.ci.items()},
@@ -140,6 +140,12 @@ class TraceFit(Summarized):
         if self.start_state is not None:
             lines.append(f"start: {self.start_state.describe()}")
         return "\n".join(lines)
+
+
+def _rms(v) -> float:
+    """rms of the finite values of ``v``; NaN when there are none."""
+    v = v[np.isfinite(v)]
+    return float(np.sqrt(np.mean(v ** 2))) if v.size else float("nan")
 
 
 def phase_of(t, y, level=None):
@@ -291,7 +297,7 @@ def settling_time(state, times, y) -> float:
 
 
 #: the pooled unit of signals in different units: each signal's residual divided by its
-#: own noise (robust second differences of the recorded column)
+#: own noise (robust fourth differences of the recorded column)
 NOISE_UNIT = "× noise"
 
 

@@ -64,7 +64,8 @@ def record_sigma(y, groups=None, order: int = 4, min_points: int = 10) -> float:
     d = d[ok]
     if len(d) < min_points:
         return float("nan")
-    return float(MAD_TO_SIGMA * np.median(np.abs(d - np.median(d))) / np.sqrt(comb(2 * order, order)))
+    spread = MAD_TO_SIGMA * np.median(np.abs(d - np.median(d)))
+    return float(spread / np.sqrt(comb(2 * order, order)))
 
 
 def segments(mask) -> np.ndarray:
