@@ -41,7 +41,8 @@ MODULES = {
     "noise": ("pneunet/truth/noise.py",
               "tests/diagnose/test_noise_floor.py tests/diagnose/test_logic.py"
               "::test_noise_floor_estimate_follows_flow_dependent_noise"),
-    "includes": ("pneunet/netlist/includes.py", "tests/netlist/test_includes.py"),
+    "includes": ("pneunet/netlist/includes.py",
+                 "tests/netlist/test_include_rules.py tests/netlist/test_includes.py"),
     "assembly": ("pneunet/engine/assembly.py",
                  "tests/core/test_element_conformance.py tests/core/test_topology_and_errors.py"),
     "valves": ("pneunet/elements/valves.py",

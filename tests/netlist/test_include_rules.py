@@ -1,0 +1,174 @@
+"""The include policy's rules at their edges: name lengths at the limit, where a name is looked
+up (the including file's folder, then the search path), the include count, self-inclusion,
+the hints, and what is opened (never followed through a link, checked by its descriptor,
+closed once).  Each test kills mutants of pneunet/netlist/includes.py that survived
+tests/netlist/test_includes.py (benchmarks/mutation.py, issue 39)."""
+import os
+from types import SimpleNamespace
+
+import pytest
+
+from pneunet.errors import NetlistError
+from pneunet.netlist import includes, parse_file
+from pneunet.netlist.includes import IncludePolicy, Opened
+
+
+def _error(top, text, **kw):
+    top.write_text(text)
+    with pytest.raises(NetlistError) as info:
+        parse_file(top, **kw)
+    return info.value
+
+
+@pytest.fixture
+def home(tmp_path):
+    (tmp_path / "home" / "lib").mkdir(parents=True)
+    (tmp_path / "shared").mkdir()
+    return tmp_path / "home"
+
+
+@pytest.mark.parametrize("length", [79, 80, 81, 200])
+def test_a_name_in_a_message_is_cut_to_80_characters(home, length):
+    name = "n" * (length - 3) + ".pn"
+    err = _error(home / "top.pn", f'.include "{name}"\n')
+    shown = name if length <= 80 else name[:79] + "…"
+    assert err.message == f"cannot find included file {shown!r}"
+    assert len(shown) == min(length, 80)
+
+
+def test_name_lengths_are_refused_past_the_limits_not_at_them(home):
+    """1024 characters in all and 255 per folder name are allowed (not found here);
+    one more of either is refused before any lookup."""
+    def message(name):
+        return _error(home / "top.pn", f'.include "{name}"\n').message
+
+    for name in ("a/" * 511 + "bb", "a" * 255):  # 1024 characters; a 255-character part
+        assert len(name) in (1024, 255)
+        assert message(name).startswith("cannot find included file"), name[:20]
+    assert message("a/" * 511 + "bbb") == "include name of 1025 characters is too long"
+    assert message("a" * 256) == "include name of 256 characters is too long"
+    assert message("x/" + "a" * 256) == "include name of 258 characters is too long"
+
+
+def test_blank_and_nul_names_are_not_file_names(home):
+    err = _error(home / "top.pn", '.include " "\n')
+    assert err.message == "' ' is not a file name"
+    policy = IncludePolicy.for_netlist(home / "top.pn")
+    with pytest.raises(NetlistError, match=r"'a\\x00b' is not a file name"):
+        policy.resolve(SimpleNamespace(text="a\0b", span=None), home)
+
+
+def test_a_name_is_looked_up_from_the_including_files_folder(home):
+    """lib/a.pn's "b.pn" is lib/b.pn, never the top folder's b.pn."""
+    (home / "b.pn").write_text("R9 a atm 1\n")
+    (home / "lib" / "a.pn").write_text('.include "b.pn"\n')
+    err = _error(home / "top.pn", '.include "lib/a.pn"\n')
+    assert err.message == "cannot find included file 'b.pn'"
+    assert err.span.file.endswith("a.pn")
+    assert err.hint == f"paths are relative to the including file ({home / 'lib'})"
+
+
+def test_the_hint_names_the_search_path_only_when_there_is_one(home, monkeypatch):
+    monkeypatch.delenv("PNEUNET_PATH", raising=False)
+    text = '.include "x.pn"\n'
+    assert not _error(home / "top.pn", text).hint.endswith("then the search path")
+    err = _error(home / "top.pn", text, include_path=[home.parent / "shared"])
+    assert err.hint == f"paths are relative to the including file ({home}), then the search path"
+
+
+def test_a_name_leading_outside_here_is_still_looked_up_in_the_search_path(home):
+    """x.pn beside the netlist is a link out of the allowed folders: it is passed over and
+    the search path's x.pn is taken (the search does not end at the refused one)."""
+    (home.parent / "outside.pn").write_text("R_OUT a atm 1\n")
+    (home / "x.pn").symlink_to(home.parent / "outside.pn")
+    (home.parent / "shared" / "x.pn").write_text("R_SHARED a atm 1\n")
+    (home / "top.pn").write_text('.include "x.pn"\n')
+    elements = parse_file(home / "top.pn", include_path=[home.parent / "shared"]).circuit.elements
+    assert "R_SHARED" in elements and "R_OUT" not in elements
+    with pytest.raises(NetlistError, match=r"'x.pn' leads outside the allowed folders \(to "):
+        parse_file(home / "top.pn")
+
+
+def test_a_file_including_itself_is_caught_at_once(home):
+    err = _error(home / "top.pn", 'R1 a atm 1\n.include "top.pn"\n')
+    assert err.message == "recursive .include: top.pn -> top.pn"
+    assert (err.span.line, err.span.column) == (2, 10)
+
+
+def test_the_include_count_allows_its_limit_and_refuses_one_more(home):
+    for i in range(4):
+        (home / f"f{i}.pn").write_text(f"R{i} a atm 1\n")
+    three = "".join(f'.include "f{i}.pn"\n' for i in range(3))
+    (home / "top.pn").write_text(three)
+    assert len(parse_file(home / "top.pn", limits={"max_includes": 3}).circuit.elements) == 3
+    err = _error(home / "top.pn", three + '.include "f3.pn"\n', limits={"max_includes": 3})
+    assert err.message.startswith("more than 3 files included in all")
+    assert err.span.line == 4
+
+
+@pytest.mark.parametrize("line, hint", [
+    (".include", 'e.g. .include "valves.pn"'),
+    ('.include "a.pn" "b.pn"', 'e.g. .include "valves.pn"'),
+    ('.include "a.pn" typical', 'e.g. .include "valves.pn"'),
+    ('.lib "a.pn" typical', ".lib sections are not supported; .lib FILE includes the whole file"),
+    ('.lib "a.pn" "b.pn" typical', 'e.g. .include "valves.pn"'),
+])
+def test_an_include_without_one_name_is_an_error_with_its_hint(home, line, hint):
+    err = _error(home / "top.pn", line + "\n")
+    assert err.message == f"{line.split()[0]} needs one file name"
+    assert err.hint == hint and err.span.line == 1
+
+
+def test_the_name_opened_is_never_followed_through_a_link(home, monkeypatch):
+    """Were the checked name a link when opened (swapped in meanwhile), the open fails
+    (O_NOFOLLOW) at the include line, even for a link to an allowed file."""
+    (home / "v.pn").write_text("R9 a atm 1\n")
+    (home / "link.pn").symlink_to(home / "v.pn")
+    monkeypatch.setattr(IncludePolicy, "resolve", lambda self, item, base: home / "link.pn")
+    err = _error(home / "top.pn", 'R1 a atm 1\n.include "v.pn"\n')
+    assert err.message == "cannot open included 'v.pn': Too many levels of symbolic links"
+    assert err.hint == "was it changed while pneunet ran?"
+    assert (err.span.line, err.span.column) == (2, 10)
+
+
+def test_what_was_opened_is_where_its_descriptor_points(home):
+    """real_path follows the open file (renamed after the open), not its name."""
+    (home / "v.pn").write_text("R9 a atm 1\n")
+    with Opened(os.open(home / "v.pn", os.O_RDONLY), home / "v.pn") as opened:
+        os.rename(home / "v.pn", home / "lib" / "w.pn")
+        assert opened.real_path() == home / "lib" / "w.pn"
+        assert opened.read_bytes() == b"R9 a atm 1\n"
+
+
+def test_an_open_file_whose_place_is_unknown_is_refused(home, monkeypatch):
+    def unknown(path):
+        raise OSError("no such descriptor")
+
+    (home / "v.pn").write_text("R9 a atm 1\n")
+    monkeypatch.setattr(includes.os, "readlink", unknown)
+    err = _error(home / "top.pn", '.include "v.pn"\n')
+    assert err.message.startswith("include 'v.pn' changed while it was opened and now leads "
+                                  "outside the allowed folders (to None)")
+    assert err.span.line == 1
+
+
+def test_included_files_are_closed_once(home):
+    """No descriptor is left open by a parse with includes, a refused one among them; an
+    Opened closed twice closes nothing else the second time."""
+    (home / "v.pn").write_text("* included twice\n")
+    (home / "lib" / "w.pn").write_text('.include "../v.pn"\n')
+    (home / "top.pn").write_text('R1 a atm 1\n.include "lib/w.pn"\n.include "v.pn"\n')
+    before = len(os.listdir("/proc/self/fd"))
+    parse_file(home / "top.pn", limits={"max_includes": 3})
+    _error(home / "top.pn", 'R1 a atm 1\n.include "lib/w.pn"\n.include "v.pn"\n',
+           limits={"max_includes": 2})
+    assert len(os.listdir("/proc/self/fd")) == before
+    opened = Opened(os.open(home / "v.pn", os.O_RDONLY), home / "v.pn")
+    opened.close()
+    assert opened.fd < 0
+    other = os.open(home / "v.pn", os.O_RDONLY)  # likely the number just freed
+    try:
+        opened.close()
+        os.fstat(other)
+    finally:
+        os.close(other)
