@@ -15,6 +15,9 @@ def register(subparsers) -> None:
                    help=f"list every node and element (by default at most {LISTED} of each)")
     p.add_argument("--draw", metavar="OUT",
                    help="also draw the schematic (.svg, .png or .pdf; as pneunet draw)")
+    from .draw import add_expand
+
+    add_expand(p)
     netlist_args.add(p)
     p.set_defaults(func=main)
 
@@ -31,10 +34,9 @@ def main(args) -> int:
     netlist_args.check_nodes(deck.circuit, args.strict)
     if args.draw:
         from .draw import check_format
-        from ..schematic import draw
 
         check_format(args.draw)
-        draw(deck.circuit, args.draw)
+        deck.draw(args.draw, expand=args.expand)
     print(f"{args.netlist}: ok")
     print(summary(deck.circuit, args.verbose))
     analyses = ", ".join(f".{a.kind}" for a in deck.analyses) or "none"

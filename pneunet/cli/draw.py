@@ -13,11 +13,13 @@ def register(subparsers) -> None:
         "draw", help="draw the circuit's schematic (SVG, PNG, PDF), optionally with results",
         description="Draw a netlist's schematic: ISO 1219-1 style symbols, flow from the "
                     "supply (left) to the exhaust (right), control lines dashed; an array "
-                    "is drawn once with its count. --op or --at write each node's pressure "
+                    "is drawn once with its count; each subcircuit instance is a box "
+                    "(--expand: its elements). --op or --at write each node's pressure "
                     "(kPa absolute) and each element's flow (mg/s) on it.")
     p.add_argument("netlist", metavar="FILE.pn", help="netlist file")
     p.add_argument("-o", "--output", required=True, metavar="OUT",
                    help="the drawing: .svg, .png or .pdf (by the suffix)")
+    add_expand(p)
     when = p.add_mutually_exclusive_group()
     when.add_argument("--op", action="store_true", help="annotate the operating point")
     when.add_argument("--at", metavar="TIME",
@@ -25,6 +27,11 @@ def register(subparsers) -> None:
                            "its start to TIME)")
     netlist_args.add(p)
     p.set_defaults(func=main)
+
+
+def add_expand(p) -> None:
+    p.add_argument("--expand", action="store_true",
+                   help="draw the elements inside each subcircuit instance, not a box")
 
 
 def check_format(path: str) -> None:
@@ -38,7 +45,6 @@ def check_format(path: str) -> None:
 
 def main(args) -> int:
     from ..netlist import parse_file
-    from ..schematic import draw
 
     check_format(args.output)
     deck = parse_file(args.netlist, **netlist_args.parse_options(args))
@@ -49,7 +55,7 @@ def main(args) -> int:
         results = deck.circuit.op(stability=False)
     elif args.at is not None:
         results = _transient_at(deck, args.at)
-    lay = draw(deck.circuit, args.output, results=results)
+    lay = deck.draw(args.output, results=results, expand=args.expand)
     symbols = sum(1 for b in lay.boxes if b[0] == "symbol")
     print(f"wrote {args.output}: {symbols} symbols, {len(lay.overlaps())} overlaps, "
           f"{lay.crossings()} wire crossings")

@@ -79,6 +79,22 @@ class Measure:
     text: str = ""
 
 
+@dataclass
+class Instance:
+    """A subcircuit instance (``X1 supply in out INV Rp=20``) as elaborated: its full name
+    (``Xcell[3]``; inside another instance ``X1.X2``), its subcircuit, the flattened
+    circuit's node on each port, its declared parameters' values (defaults and the
+    instance's own) and the names of the elements it made; ``depth`` 0 at the top level."""
+
+    name: str
+    subckt: str
+    ports: dict
+    params: dict
+    depth: int = 0
+    elements: tuple = ()
+    span: SourceSpan | None = None
+
+
 @dataclass(repr=False)
 class Deck(Summarized):
     """A netlist after elaboration.
@@ -86,7 +102,7 @@ class Deck(Summarized):
     ``circuit`` is the (flattened) :class:`~pneunet.engine.circuit.Circuit`; ``analyses``
     the analyses in file order; ``measures`` the ``.meas`` statements; ``saves``
     the signals to write (empty: all); ``steps`` the ``.step`` sweeps (nested,
-    first outermost).  :meth:`variant` rebuilds the deck with parameter values
+    first outermost); ``instances`` the subcircuit instances (:class:`Instance`).  :meth:`variant` rebuilds the deck with parameter values
     overridden (what ``.step`` does).
     """
 
@@ -100,6 +116,7 @@ class Deck(Summarized):
     params: dict = field(default_factory=dict)
     overrides: dict = field(default_factory=dict)
     source: Any = None  # the parsed statements, to rebuild variants
+    instances: list = field(default_factory=list)
 
     def _summary(self):
         rows = [("elements", str(len(self.circuit.elements))),
@@ -120,6 +137,18 @@ class Deck(Summarized):
             if err.where is not None or err.span is not None:
                 raise
             raise type(err)(err.message, where=self.file, hint=err.hint) from None
+
+    def draw(self, path=None, *, results=None, expand: bool = False):
+        """The circuit's schematic (:func:`pneunet.schematic.draw`): each subcircuit
+        instance a box, or its elements with ``expand=True``."""
+        from ..schematic import draw
+
+        return draw(self.circuit, path, results=results,
+                    instances=None if expand else self.instances)
+
+    def _repr_svg_(self) -> str:
+        """Jupyter shows a deck as its schematic."""
+        return self.draw().svg
 
     def step_points(self) -> list[dict]:
         """All combinations of the ``.step`` values ([{}] without ``.step``)."""

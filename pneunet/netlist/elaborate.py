@@ -18,7 +18,7 @@ from .analyses import AnalysisStatements
 from . import plausible
 from .arrays import split_range
 from .datafiles import inline_table, read_data_file
-from .deck import Deck, Op
+from .deck import Deck, Instance, Op
 from ..engine.options import SimulationOptions
 from .expr import Scope, evaluate
 from .fluid_cards import read_fluid_cards
@@ -68,6 +68,7 @@ class _Builder(ModelCards, AnalysisStatements, MeasureStatements, WaveformCalls)
         self.converted: dict[tuple[str, str], float] = {}  # (literal, slot) -> value
         self.node_set: set[str] = set()  # the nodes of the first node_count elements
         self.node_count = 0
+        self.instances: list[list] = []   # [Instance, index of its first element, of its end]
 
     # ---- top level
     def build(self) -> Deck:
@@ -107,7 +108,7 @@ class _Builder(ModelCards, AnalysisStatements, MeasureStatements, WaveformCalls)
                        "write one element per line, e.g. 'P1 supply 400kPa' (docs/netlist.md)")
         deck = Deck(self.circuit, title=self.source.title, file=self.source.file,
                     params=dict(self.scope.values), overrides=dict(self.overrides),
-                    source=self.source)
+                    source=self.source, instances=self._instances())
         for st in top:
             kw = st.keyword
             if kw == ".tran":
@@ -523,10 +524,23 @@ class _Builder(ModelCards, AnalysisStatements, MeasureStatements, WaveformCalls)
             inner.values[k] = self._scalar(it.value, scope)
         if idx is not None:
             inner.values.setdefault("index", float(idx))
+        inst = Instance(full, sub.name, actual, {d.key.text: inner.values[d.key.text]
+                                                 for d in sub.defaults}, len(stack),
+                        span=name_item.span)
+        made = [inst, len(self.circuit.elements), None]
+        self.instances.append(made)
         for s in sub.body:
             if s.keyword == ".param":
                 self._param(s, inner)
         self._body(sub.body, inner, full + ".", actual, stack + [sub.name.lower()])
+        made[2] = len(self.circuit.elements)
+
+    def _instances(self) -> list[Instance]:
+        """The instances, each with the names of the elements it made."""
+        names = list(self.circuit.elements)
+        for inst, start, stop in self.instances:
+            inst.elements = tuple(names[start:stop])
+        return [inst for inst, _, _ in self.instances]
 
     def _ic(self, st, scope, prefix, nodemap):
         if len(st.items) < 2:

@@ -8,15 +8,16 @@ from .layout import layout
 from .svg import save_raster, to_svg
 
 
-def draw(circuit, path=None, *, results=None) -> Layout:
+def draw(circuit, path=None, *, results=None, instances=None) -> Layout:
     """The schematic of ``circuit``; written to ``path`` (.svg, .png or .pdf) if given.
 
     ``results`` is an :class:`~pneunet.engine.solution.OperatingPoint` or a
     ``(Solution, time)`` pair: node pressures (kPa) and element flows (mg/s) are written
-    on the drawing."""
+    on the drawing.  ``instances`` (a netlist's ``Deck.instances``) draws each top-level
+    subcircuit instance as a box; without them every element is drawn."""
     from .annotate import notes
 
-    sch = collapse(circuit)
+    sch = collapse(circuit, instances)
     node_notes, part_notes = notes(sch, results) if results is not None else ({}, {})
     lay = layout(sch, node_notes, part_notes)
     lay.svg = to_svg(lay, circuit.title)

@@ -1,6 +1,7 @@
 """Results written on a schematic: each node's pressure (kPa absolute) and each element's
 mass flow (mg/s), from an operating point or a transient at one time (an array drawn once
-shows the range over its members)."""
+shows the range over its members).  A subcircuit box gets no flow: its ports' pressures
+are on the nodes it is wired to."""
 from __future__ import annotations
 
 from ..errors import ParameterError
@@ -35,6 +36,8 @@ def notes(sch, results) -> tuple[dict, dict]:
                   for key, names in sch.nodes.items()}
     part_notes = {}
     for key, part in sch.parts.items():
+        if part.pins:
+            continue
         members = part.names[::part.segments]       # a tube's flow is its first segment's
         part_notes[key] = _text("ṁ=", [flows[n] for n in members if n in flows], "mg/s")
     return ({k: v for k, v in node_notes.items() if v},

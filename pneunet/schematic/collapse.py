@@ -4,7 +4,9 @@ Elements of an array or of arrayed subcircuit instances (``Xcell[3].X0``) whose 
 nodes differ only in their indices become one :class:`Part` with a count (``Xcell[0:7].X0
 ×8``); a tube's segments (``T1.s1`` … ``T1.sN``) become the tube.  Nodes are collapsed
 the same way (``act[0:7]``).  Reference nodes (``0``, ``gnd``, ``atm``) are not nodes of
-the drawing: each port on one gets its own exhaust symbol.
+the drawing: each port on one gets its own exhaust symbol.  Given a netlist's subcircuit
+instances, each top-level instance (or array of them) is one box (:mod:`.boxes`) in place of
+its elements.
 """
 from __future__ import annotations
 
@@ -12,6 +14,7 @@ import re
 from dataclasses import dataclass, field
 
 from .. import elements
+from .boxes import Pin, params_line, roles
 
 _INDEX = re.compile(r"\[(\d+)\]")
 _SEGMENT = re.compile(r"^(.*)\.s(\d+)$")
@@ -29,12 +32,16 @@ class Part:
     label: str                      # the name as drawn (``Xcell[0:7].X0``)
     names: list[str]                # every element it stands for
     ports: dict[str, str]           # port name -> node key (or a reference node)
-    spec: object                    # the first element's ElementSpec
+    spec: object                    # the first element's ElementSpec (None: a box)
     segments: int = 1               # a tube's segment count
+    pins: tuple = ()                # a subcircuit box's pins (:class:`.boxes.Pin`)
+    subckt: str = ""                # a box's subcircuit
+    params: str = ""                # a box's parameters
+    instances: int = 0              # a box's count of instances
 
     @property
     def count(self) -> int:
-        return len(self.names) // self.segments
+        return self.instances or len(self.names) // self.segments
 
 
 @dataclass
@@ -74,12 +81,43 @@ def _label(pattern: str, indices: list[tuple[int, ...]]) -> str:
     return text
 
 
-def collapse(circuit) -> Schematic:
-    """The parts and nodes of ``circuit`` (a :class:`~pneunet.Circuit`)."""
+def _boxes(circuit, instances):
+    """Box parts of the top-level ``instances``, one per array, and the nodes they reach
+    ``[(index, node)]`` by node pattern."""
+    groups: dict[tuple, list] = {}
+    for inst in instances:
+        if inst.depth == 0:
+            groups.setdefault((_pattern(inst.name)[0], inst.subckt), []).append(inst)
+    parts, nodes = [], {}
+    for (pat, subckt), members in groups.items():
+        role = roles(circuit, members[0], AUX_PORTS)
+        pins = {}
+        for m in members:
+            for port, node in m.ports.items():
+                ref = circuit.is_reference(node)
+                p, i = ("atm", ()) if ref else _pattern(node)
+                pins.setdefault(Pin(port, p, role[port]), None)
+                if not ref:
+                    nodes.setdefault(p, []).append((i, node))
+        label = _label(pat, [_pattern(m.name)[1] for m in members]) if "[#]" in pat else pat
+        names = [n for m in members for n in m.elements]
+        parts.append(Part(label, "subckt", label, names, {}, None, pins=tuple(pins),
+                          subckt=subckt, params=params_line(members), instances=len(members)))
+    return parts, nodes
 
+
+def collapse(circuit, instances=None) -> Schematic:
+    """The parts and nodes of ``circuit`` (a :class:`~pneunet.Circuit`); each top-level
+    subcircuit instance of ``instances`` (a netlist's, :class:`~pneunet.netlist.deck.
+    Instance`) a box."""
+
+    boxes, node_index = _boxes(circuit, instances or [])
+    inside = {n for b in boxes for n in b.names}
     tubes: dict[str, list] = {}
     plain = []
     for spec in circuit.elements.values():
+        if spec.name in inside:
+            continue
         m = _SEGMENT.match(spec.name)
         if spec.kind == "tube" and m:
             tubes.setdefault(m.group(1), []).append((int(m.group(2)), spec))
@@ -92,7 +130,6 @@ def collapse(circuit) -> Schematic:
         plain[-1] = plain[-1] + ([s.name for _, s in segs],)
 
     groups: dict[tuple, list] = {}
-    node_index: dict[str, list] = {}
     for item in plain:
         name, spec, nodes, segments = item[:4]
         pat, idx = _pattern(name)
@@ -109,6 +146,9 @@ def collapse(circuit) -> Schematic:
         sch.nodes[pat] = names
         sch.labels[pat] = _label(pat, [_pattern(n)[1] for n in names]) if "[#]" in pat else pat
     used: dict[str, int] = {}
+    for box in boxes:
+        sch.parts[box.key] = box
+        used[box.label] = 1
     for (pat, kind, node_pats, segments), members in groups.items():
         family = elements.family(kind)
         names = [n for _, item in members for n in (item[4] if len(item) > 4 else [item[0]])]

@@ -29,7 +29,10 @@ def name_line(part) -> str:
 
 
 def value_line(part) -> str:
-    """The part's key values, e.g. ``R=1.132 kPa·s/mg`` or ``496 kPa``; '' if none."""
+    """The part's key values, e.g. ``R=1.132 kPa·s/mg`` or ``496 kPa`` (a subcircuit box:
+    its parameters); '' if none."""
+    if part.pins:
+        return part.params
     params = part.spec.params
     if part.kind in ("pressure_source", "flow_source"):
         return _waveform(params.get("value"), "kPa" if part.kind == "pressure_source" else "mg/s")

@@ -14,6 +14,8 @@ from dataclasses import dataclass, field
 
 import networkx as nx
 
+from . import boxes
+from .boxes import is_control
 from .collapse import Schematic
 from .labels import name_line, value_line
 from .geometry import CHAR_W, GAP_Y, LINE_H, MARGIN
@@ -41,9 +43,11 @@ class Vertex:
 
 
 def _part_vertex(part, extra: str | None):
-    sym = symbol(part.kind)
     lines = [(t, cls) for t, cls in ((name_line(part), "name"), (value_line(part), "value"),
                                      (extra, "result")) if t]
+    if part.pins:                     # a subcircuit box: sized once its pins' sides are known
+        return Vertex(("part", part.key), 0, 0, 0, lines, part)
+    sym = symbol(part.kind)
     ports = list(part.ports.items())
     left_ex = any(n == "atm" for p, n in ports[:1]) and sym.port == "both"
     right_ex = any(n == "atm" for p, n in ports[1:2]) and sym.port == "both"
@@ -68,6 +72,12 @@ def _edges(sch: Schematic):
     control ports are ``"ctrl"``."""
     out = []
     for part in sch.parts.values():
+        for pin in part.pins:
+            if pin.node != "atm":
+                pk, nk = ("part", part.key), ("node", pin.node)
+                out.append((pk, nk, pin) if pin.role == "out" else (nk, pk, pin))
+        if part.pins:
+            continue
         sym = symbol(part.kind)
         ports = list(part.ports.items())
         for i, (port, node) in enumerate(ports):
@@ -89,7 +99,7 @@ def _feedback(vertices, edges):
     then each control edge that would close a cycle."""
     g = nx.DiGraph()
     g.add_nodes_from(vertices)
-    flow = [(a, b) for a, b, p in edges if p != "ctrl"]
+    flow = [(a, b) for a, b, p in edges if not is_control(p)]
     g.add_edges_from(flow)
     roots = [v for v in vertices if v[0] == "part" and vertices[v].part.kind in SOURCES]
     removed = []
@@ -98,7 +108,7 @@ def _feedback(vertices, edges):
         g.remove_edge(a, b)
         removed.append((a, b, "flow"))
     reverse = set()
-    for a, b, p in removed + [e for e in edges if e[2] == "ctrl"]:
+    for a, b, p in removed + [e for e in edges if is_control(e[2])]:
         if nx.has_path(g, b, a):      # forward would close a cycle: draw it reversed
             g.add_edge(b, a)
             reverse.add((a, b))
@@ -128,7 +138,8 @@ def _isotonic(targets, sizes, gap):
 
 
 def _place_y(layers, neighbours, anchor, size, sweeps=6):
-    """y of each layer item's anchor: stacked, then pulled to its neighbours' barycentre."""
+    """y of each layer item's anchor: stacked, then pulled to its neighbours' barycentre
+    (``neighbours[v]``: ``(u, off)``, a straight wire wants v's anchor at u's + off)."""
     y = {}
     for layer in layers:
         tops = _isotonic([0.0] * len(layer), [size[v] for v in layer], GAP_Y)
@@ -139,11 +150,36 @@ def _place_y(layers, neighbours, anchor, size, sweeps=6):
             layer = layers[r]
             targets = []
             for v in layer:
-                near = [y[u] for u in neighbours[v]]
+                near = [y[u] + off for u, off in neighbours[v]]
                 targets.append((sum(near) / len(near) if near else y[v]) - anchor[v])
             tops = _isotonic(targets, [size[v] for v in layer], GAP_Y)
             y.update({v: t + anchor[v] for v, t in zip(layer, tops)})
     return y
+
+
+def _finish_boxes(vertices, chains, sug) -> None:
+    """Each box's pins on the side of the node they are wired to, in the order of the
+    wires' next items in their layer; then the box's size."""
+    sides: dict = {}
+    for (a, b, port), chain in chains:
+        for end, near in ((chain[0], chain[1]), (chain[-1], chain[-2])):
+            v = vertices.get(getattr(end, "data", None))
+            if v is not None and v.part is not None and v.part.pins:
+                side = -1 if sug.grx[near].rank < sug.grx[end].rank else 1
+                sides.setdefault(v.key, {})[port] = (side, sug.grx[near].pos)
+    for key, pins in sides.items():
+        boxes.finish(vertices[key], pins)
+    for v in vertices.values():
+        if v.part is not None and v.part.pins and v.key not in sides:
+            boxes.finish(v, {})
+
+
+def _pin_offset(vertices, item, edge) -> float:
+    """y of a box's pin for ``edge`` below the box's anchor (0 for any other end)."""
+    v = vertices.get(getattr(item, "data", None))
+    if v is None or v.part is None or not v.part.pins:
+        return 0.0
+    return v.pin_y[edge[2]] - v.anchor
 
 
 def layout(sch: Schematic, node_notes=None, part_notes=None) -> "Layout":
@@ -185,6 +221,12 @@ def layout(sch: Schematic, node_notes=None, part_notes=None) -> "Layout":
             for _ in sug.ordering_step():
                 pass
         layers = [list(layer) for layer in sug.layers]
+        comp_chains = []
+        for e in comp.sE:
+            ctrl = sug.ctrls.get(e)
+            lo, hi = sorted((e.v[0], e.v[1]), key=lambda x: sug.grx[x].rank)
+            comp_chains.append((e.data, [ctrl[r] for r in sorted(ctrl)] if ctrl else [lo, hi]))
+        _finish_boxes(vertices, comp_chains, sug)
         for r, layer in enumerate(layers):
             for item in layer:
                 real = getattr(item, "data", None)
@@ -194,14 +236,13 @@ def layout(sch: Schematic, node_notes=None, part_notes=None) -> "Layout":
                 else:
                     size[item], anchor[item] = 2.0, 1.0
                 neighbours[item] = []
-        for e in comp.sE:
-            ctrl = sug.ctrls.get(e)
-            lo, hi = sorted((e.v[0], e.v[1]), key=lambda x: sug.grx[x].rank)
-            chain = [ctrl[r] for r in sorted(ctrl)] if ctrl else [lo, hi]
+        for edge, chain in comp_chains:
+            offset = {item: _pin_offset(vertices, item, edge) for item in (chain[0], chain[-1])}
             for p, q in zip(chain, chain[1:]):
-                neighbours[p].append(q)
-                neighbours[q].append(p)
-            chains.append((e.data, chain))
+                dp, dq = offset.get(p, 0.0), offset.get(q, 0.0)
+                neighbours[p].append((q, dq - dp))
+                neighbours[q].append((p, dp - dq))
+        chains += comp_chains
         y = _place_y(layers, {k: [] for k in neighbours} | neighbours, anchor, size)
         low = min(y[v] - anchor[v] for layer in layers for v in layer)
         high = max(y[v] - anchor[v] + size[v] for layer in layers for v in layer)

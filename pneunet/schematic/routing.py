@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import functools
 
+from . import boxes as _boxes
+from .boxes import is_control
 from .geometry import CHANNEL, GAP_X, LINE_H, MARGIN, Layout, text_box
 from .symbols import EXHAUST_W, exhaust
 
@@ -15,7 +17,7 @@ def _mirror(vertices) -> None:
     """Flip a part whose flow runs right to left (its inlet's node ranks after it)."""
     for v in vertices.values():
         part = v.part
-        if part is None:
+        if part is None or part.pins:
             continue
         nodes = [n for p, n in part.ports.items() if p != "ctrl"]
         ranks = [vertices[("node", n)].rank if n != "atm" else None for n in nodes]
@@ -50,6 +52,8 @@ def _port_point(v, port):
     if v.part is None:
         return v.x + v.w / 2, v.y + v.anchor
     sx, sy = _geometry(v)
+    if v.part.pins:
+        return _boxes.pin_point(v, sx, port)
     side = _side(v, port)
     if side == 0:
         return sx + PILOT_X, sy
@@ -70,6 +74,8 @@ def _draw_part(v, prims, boxes):
         else:
             prims.append(("circle", place(prim[1]), *prim[2:]))
     box = [sx, sy, sx + sym.w, sy + sym.h]
+    if v.part.pins:
+        box = _boxes.draw(v, sx, prims, box)
     for port, node in v.part.ports.items():
         if node != "atm":
             continue
@@ -120,7 +126,9 @@ def route(vertices, chains, columns, items_y) -> Layout:
         if v is None:
             return items_y[item]
         port = edge[2]
-        return _port_point(v, port)[1] if v.part is not None and port == "ctrl" else v.y + v.anchor
+        if v.part is not None and (port == "ctrl" or v.part.pins):
+            return _port_point(v, port)[1]
+        return v.y + v.anchor
 
     gaps = [dict() for _ in columns]              # rank -> net -> (left ys, right ys)
     for edge, chain in chains:
@@ -163,7 +171,7 @@ def route(vertices, chains, columns, items_y) -> Layout:
                 pts.append((col_x[rank + 1][1], y2))
         end = _port_point(last, edge[2] if last.part is not None else None)
         pts += [(end[0], pts[-1][1])] + ([end] if abs(end[1] - pts[-1][1]) > 0.5 else [])
-        wires.append((net, _clean(pts), edge[2] == "ctrl"))
+        wires.append((net, _clean(pts), is_control(edge[2])))
 
     prims, boxes = [], []
     for v in real.values():
