@@ -44,7 +44,9 @@ MODULES = {
     "includes": ("pneunet/netlist/includes.py",
                  "tests/netlist/test_include_rules.py tests/netlist/test_includes.py"),
     "assembly": ("pneunet/engine/assembly.py",
-                 "tests/core/test_element_conformance.py tests/core/test_topology_and_errors.py"),
+                 "tests/core/test_assembly.py tests/core/test_algebraic_block.py "
+                 "tests/core/test_element_conformance.py "
+                 "-k 'assembly or algebraic or jacobian or fast_flows'"),
     "valves": ("pneunet/elements/valves.py",
                "tests/core/test_valve_family_routes.py tests/core/test_valve_law_reference.py "
                "tests/core/test_scalar_laws.py tests/core/test_element_conformance.py "

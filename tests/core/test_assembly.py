@@ -1,0 +1,195 @@
+"""The DAE assembly (pneunet/engine/assembly.py) against the circuit's equations written out
+by hand: F_i = Σ of the flows leaving node i, quadrature resistors √(p_a² − p_b²)/R (with
+the flow band), volumes C·ṗ with C = M·V/(R_gas·T), a flow source's constant flow; its
+Jacobian against central differences of that hand-written residual; the mass matrix, the
+consistent rates, the dead volume, the initial state, the sources' flows, the algebraic
+block and the merged breakpoints."""
+import numpy as np
+import pytest
+
+from pneunet import Circuit
+from pneunet.engine.assembly import AlgebraicBlock, CircuitDAE, distinct_times
+from pneunet.gas import AIR, GAS_CONSTANT
+from pneunet.waveforms import Step
+
+AMB, BAND, T_K = 96.0, 10.0, 293.15
+R1, R2, R3, R4 = 1.0, 2.0, 1.5, 0.7
+V1, V2, FLOW = 20.0, 35.0, 50.0
+
+
+def _circuit(**options):
+    """s (source, 200 → 300 kPa at t = 1 s) –R1– a (V1, F1 draws 50 mg/s from a to atm)
+    –R2– b (no volume) –R3– atm; a –R4– c (V2, .ic 180 kPa)."""
+    c = Circuit("mixed", ambient=AMB, flow_band=BAND, temperature=T_K, **options)
+    c.pressure_source("P1", "s", Step(200.0, 300.0, at=1.0))
+    c.resistor("R1", "s", "a", R=R1)
+    c.volume("V1", "a", V=V1, p0=150.0)
+    c.flow_source("F1", "a", "atm", FLOW)
+    c.resistor("R2", "a", "b", R=R2)
+    c.resistor("R3", "b", "atm", R=R3)
+    c.resistor("R4", "a", "c", R=R4)
+    c.volume("V2", "c", V=V2, p0=120.0)
+    c.set_initial("c", 180.0)
+    return c
+
+
+def _q(pa, pb, r):
+    """Quadrature flow a → b with the band: d/(d² + ε²)^¼ / R, d = pa² − pb²."""
+    d = pa * pa - pb * pb
+    return d / (d * d + BAND * BAND) ** 0.25 / r
+
+
+def _cap(v):
+    return AIR.molar_mass_g_mol * 1e3 * v / (GAS_CONSTANT * 1e3 * T_K)
+
+
+def _source(t):
+    return 200.0 if t < 1.0 else 300.0
+
+
+def _reference(t, p, pdot, dead=0.0):
+    """F at nodes a, b, c (dict of pressures and rates by node name), mg/s."""
+    s = _source(t)
+    return {"a": _q(p["a"], s, R1) + _cap(V1) * pdot["a"] + FLOW + _q(p["a"], p["b"], R2)
+            + _q(p["a"], p["c"], R4),
+            "b": _q(p["b"], p["a"], R2) + _q(p["b"], AMB, R3) + _cap(dead) * pdot["b"],
+            "c": _q(p["c"], p["a"], R4) + _cap(V2) * pdot["c"]}
+
+
+def _point(dae, seed=3):
+    rng = np.random.default_rng(seed)
+    return rng.uniform(120.0, 320.0, dae.n), rng.normal(0.0, 40.0, dae.n)
+
+
+def _by_name(dae, v):
+    return {n: v[dae.node_index(n)] for n in dae.node_names}
+
+
+def _vector(dae, d):
+    return np.array([d[n] for n in dae.node_names])
+
+
+@pytest.mark.parametrize("t", [0.4, 2.5])
+def test_residual_is_the_sum_of_the_flows_leaving_each_node(t):
+    dae = CircuitDAE(_circuit())
+    assert sorted(dae.node_names) == ["a", "b", "c"] and sorted(dae.fixed_names) == ["atm", "s"]
+    y, ydot = _point(dae)
+    ref = _vector(dae, _reference(t, _by_name(dae, y), _by_name(dae, ydot)))
+    np.testing.assert_allclose(dae.evaluate(t, y, ydot)[0], ref, rtol=1e-12)
+    res, data = dae.evaluate(t, y, ydot, cj=5.0)
+    np.testing.assert_allclose(res, ref, rtol=1e-12)
+    assert data.shape == (dae.nnz,)
+
+
+@pytest.mark.parametrize("t, cj", [(0.4, 0.0), (2.5, 7.0)])
+def test_jacobian_is_the_hand_written_residuals_derivative(t, cj):
+    """∂F/∂y + cj·∂F/∂ẏ, as CSC data, dense array and scipy matrix, against central
+    differences of the reference residual; the pattern holds exactly the pairs an element
+    joins (b and c share no element) and every diagonal."""
+    dae = CircuitDAE(_circuit())
+    y, ydot = _point(dae, seed=4)
+    numeric = np.zeros((dae.n, dae.n))
+    h = 1e-5
+    for j in range(dae.n):
+        e = np.zeros(dae.n)
+        e[j] = h
+
+        def f(y_, yd_):
+            return _vector(dae, _reference(t, _by_name(dae, y_), _by_name(dae, yd_)))
+        numeric[:, j] = (f(y + e, ydot) - f(y - e, ydot)) / (2 * h) \
+            + cj * (f(y, ydot + e) - f(y, ydot - e)) / (2 * h)
+    data = dae.evaluate(t, y, ydot, cj)[1]
+    np.testing.assert_allclose(dae.dense(data), numeric, rtol=1e-6, atol=1e-9)
+    np.testing.assert_allclose(dae.jacobian(t, y, ydot, cj).toarray(), numeric, rtol=1e-6,
+                               atol=1e-9)
+    out = np.full((dae.n, dae.n), 9.0)
+    assert dae.dense(data, out) is out and np.array_equal(out, dae.dense(data))
+    b, c = dae.node_index("b"), dae.node_index("c")
+    pattern = dae.sparsity().toarray()
+    expected = np.ones((dae.n, dae.n))
+    expected[b, c] = expected[c, b] = 0.0
+    np.testing.assert_array_equal(pattern, expected)
+    rows, cols = dae.entries()
+    assert dae.nnz == len(rows) == 7
+    np.testing.assert_array_equal(dae.dense(data)[rows, cols], data)
+
+
+def test_mass_matrix_capacitance_and_consistent_rates():
+    dae = CircuitDAE(_circuit())
+    y, _ = _point(dae, seed=5)
+    a, b, c = (dae.node_index(n) for n in "abc")
+    cap = np.zeros(dae.n)
+    cap[a], cap[c] = _cap(V1), _cap(V2)
+    np.testing.assert_allclose(dae.capacitance(1.5, y), cap, rtol=1e-12)
+    np.testing.assert_allclose(dae.mass_matrix(1.5, y).toarray(), np.diag(cap), rtol=1e-12,
+                               atol=1e-15)
+    np.testing.assert_array_equal(dae.differential, [n != "b" for n in dae.node_names])
+    np.testing.assert_array_equal(dae.algebraic_idx, [b])
+    f0 = _reference(1.5, _by_name(dae, y), dict.fromkeys("abc", 0.0))
+    ydot = dae.derivative(1.5, y)
+    assert ydot[a] == pytest.approx(-f0["a"] / _cap(V1), rel=1e-12)
+    assert ydot[c] == pytest.approx(-f0["c"] / _cap(V2), rel=1e-12)
+    assert ydot[b] == 0.0
+
+
+def test_a_dead_volume_goes_to_every_node_without_storage():
+    dae = CircuitDAE(_circuit(dead_volume=0.5))
+    assert dae.differential.all()
+    y, ydot = _point(dae, seed=6)
+    ref = _reference(0.3, _by_name(dae, y), _by_name(dae, ydot), dead=0.5)
+    np.testing.assert_allclose(dae.evaluate(0.3, y, ydot)[0], _vector(dae, ref), rtol=1e-12)
+    assert dae.capacitance(0.3, y)[dae.node_index("b")] == pytest.approx(_cap(0.5), rel=1e-12)
+    assert dae.capacitance(0.3, y)[dae.node_index("a")] == pytest.approx(_cap(V1), rel=1e-12)
+
+
+def test_initial_state_takes_ic_then_p0_then_ambient():
+    dae = CircuitDAE(_circuit())
+    start = _by_name(dae, dae.initial_state(0.0))
+    assert start == {"a": 150.0, "b": AMB, "c": 180.0}
+
+
+def test_full_pressures_and_the_sources_flows_over_a_history():
+    dae = CircuitDAE(_circuit())
+    times = np.array([0.2, 0.9, 1.1, 3.0])
+    states = np.random.default_rng(7).uniform(120.0, 320.0, (times.size, dae.n))
+    full = dae.full_pressures(times, states)
+    s, atm = dae.node_index("s"), dae.node_index("atm")
+    np.testing.assert_array_equal(full[:, s], [200.0, 200.0, 300.0, 300.0])
+    np.testing.assert_array_equal(full[:, atm], AMB)
+    np.testing.assert_array_equal(full[:, :dae.n], states)
+    assert dae.pinned_sources() == {"P1": "s"}
+    a = states[:, dae.node_index("a")]
+    np.testing.assert_allclose(dae.source_flows(times, full)["P1"],
+                               _q(full[:, s], a, R1), rtol=1e-12)
+
+
+def test_algebraic_block_is_the_algebraic_rows_of_the_full_system():
+    """F_b and ∂F_b/∂p_b at ẏ = 0, dense and sparse, and the row scale |∂q/∂p_b| summed
+    over the elements at b."""
+    dae = CircuitDAE(_circuit())
+    y, _ = _point(dae, seed=8)
+    b = dae.node_index("b")
+    p = _by_name(dae, y)
+    full = dae.dense(dae.evaluate(2.0, y, np.zeros(dae.n), cj=0.0)[1])
+    f_b = _reference(2.0, p, dict.fromkeys("abc", 0.0))["b"]
+    h = 1e-5
+    slopes = [(_q(p["b"] + h, o, r) - _q(p["b"] - h, o, r)) / (2 * h)
+              for o, r in ((p["a"], R2), (AMB, R3))]
+    for limit in (40, 0):
+        block = AlgebraicBlock(dae, dense_limit=limit)
+        res, jac, scale = block.evaluate(2.0, y)
+        jac = jac if isinstance(jac, np.ndarray) else jac.toarray()
+        assert res == pytest.approx([f_b], rel=1e-12)
+        assert jac.shape == (1, 1) and jac[0, 0] == pytest.approx(full[b, b], rel=1e-12)
+        assert jac[0, 0] == pytest.approx(sum(slopes), rel=1e-6)
+        assert scale == pytest.approx([sum(abs(s) for s in slopes)], rel=1e-6)
+
+
+def test_breakpoints_equal_up_to_rounding_are_one():
+    np.testing.assert_array_equal(distinct_times([np.array([16 + 0.01, 3.0]),
+                                                  np.array([2 * 8 + 0.01])]), [3.0, 16.01])
+    np.testing.assert_array_equal(distinct_times([np.array([1.0, 1.0 + 1e-9])]),
+                                  [1.0, 1.0 + 1e-9])
+    assert distinct_times([]).size == 0
+    dae = CircuitDAE(_circuit())
+    np.testing.assert_array_equal(dae.jumps(0.0, 5.0), [1.0])
