@@ -3,9 +3,10 @@ count, is one box titled with its subcircuit's name, a pin per port (an array wh
 reach different nodes on one port has a pin per node), its parameters written under it.
 
 A pin's role sets the direction the layered layout gives its wire: ``"out"`` where another
-port or a source inside lies upstream through the subcircuit's own flow paths (and none
-downstream), ``"in"`` otherwise (flow on to another port or an exhaust, or a load),
-``"ctrl"`` where the port reaches only valves' control ports (drawn dashed).  Which side of the box a pin sits on is chosen once the layers are
+port or a source inside lies upstream through the subcircuit's own flow paths (and, but for
+the first port, none downstream), ``"in"`` otherwise (flow on to another port or an
+exhaust, or a load), ``"ctrl"`` where the port reaches only valves' control ports (drawn
+dashed).  Which side of the box a pin sits on is chosen once the layers are
 known: the side of the node it is wired to, pins ordered as their neighbours are.
 """
 from __future__ import annotations
@@ -58,7 +59,7 @@ def roles(circuit, inst, aux_ports) -> dict[str, str]:
             out[port] = "ctrl" if node in ctrl else "in"
             continue
         others = {n for p, n in inst.ports.items() if n != node}
-        down = bool((others | {exhaust}) & nx.descendants(flow, node))
+        down = bool(others & nx.descendants(flow, node))
         up = bool((others | {source}) & nx.ancestors(flow, node))
         out[port] = "out" if up and (not down or i > 0) else "in"
     return out

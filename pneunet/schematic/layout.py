@@ -10,6 +10,7 @@ net in the gap between two columns.
 """
 from __future__ import annotations
 
+import random
 from dataclasses import dataclass, field
 
 import networkx as nx
@@ -23,6 +24,7 @@ from .routing import route
 from .symbols import EXHAUST_W, symbol
 
 SOURCES = ("pressure_source", "flow_source")
+ATTEMPTS = 4      # edge orders tried (fewer if one draws without crossings)
 
 
 @dataclass
@@ -182,12 +184,29 @@ def _pin_offset(vertices, item, edge) -> float:
     return v.pin_y[edge[2]] - v.anchor
 
 
+def _components(gv, gedges):
+    """grandalf graphs of the connected parts, vertices and edges in the schematic's order
+    (grandalf's ``Graph.C`` collects edges in a set: layouts that change from run to run)."""
+    from grandalf.graphs import graph_core
+
+    g = nx.Graph()
+    g.add_nodes_from(gv)
+    g.add_edges_from(e.data[:2] for e in gedges)
+    index = {k: i for i, k in enumerate(gv)}
+    comps = sorted((sorted(c, key=index.get) for c in nx.connected_components(g)),
+                   key=lambda c: index[c[0]])
+    out = []
+    for keys in comps:
+        inside = set(keys)
+        out.append(graph_core([gv[k] for k in keys], [e for e in gedges if e.data[0] in inside]))
+    return out
+
+
 def layout(sch: Schematic, node_notes=None, part_notes=None) -> "Layout":
     """Place the parts and nodes of ``sch``; ``node_notes``/``part_notes`` add a line of
-    text (results) under a node's or a part's label."""
-    from grandalf.graphs import Edge, Graph, Vertex as GVertex
-    from grandalf.layouts import SugiyamaLayout
-
+    text (results) under a node's or a part's label.  grandalf's barycentric ordering
+    depends on the order it meets the edges: the drawing with the fewest crossings of
+    ``ATTEMPTS`` orders is kept (the schematic's own first, then seeded shuffles)."""
     node_notes, part_notes = node_notes or {}, part_notes or {}
     vertices = {}
     for part in sch.parts.values():
@@ -198,8 +217,26 @@ def layout(sch: Schematic, node_notes=None, part_notes=None) -> "Layout":
         vertices[v.key] = v
     edges = _edges(sch)
     reverse, dag = _feedback(vertices, edges)
+    best = None
+    for attempt in range(ATTEMPTS):
+        rng = random.Random(attempt)
+        keys = rng.sample(list(vertices), len(vertices)) if attempt else list(vertices)
+        order = rng.sample(edges, len(edges)) if attempt else edges
+        lay = _attempt(vertices, keys, order, reverse, dag)
+        if best is None or lay.crossings() < best.crossings():
+            best = lay
+        if best.crossings() == 0:
+            break
+    return best
 
-    gv = {k: GVertex(k) for k in vertices}
+
+def _attempt(vertices, keys, edges, reverse, dag):
+    """One layout, grandalf's crossing reduction started from the vertices ``keys`` and the
+    ``edges`` in their order."""
+    from grandalf.graphs import Edge, Vertex as GVertex
+    from grandalf.layouts import SugiyamaLayout
+
+    gv = {k: GVertex(k) for k in keys}
     for k, v in gv.items():
         v.view = type("View", (), {"w": vertices[k].h, "h": vertices[k].w})()
     gedges, inverted = [], []
@@ -208,12 +245,11 @@ def layout(sch: Schematic, node_notes=None, part_notes=None) -> "Layout":
         gedges.append(e)
         if (a, b) in reverse:
             inverted.append(e)
-    graph = Graph(list(gv.values()), gedges)
 
     items_y, size, anchor, neighbours, columns = {}, {}, {}, {}, []
     chains = []
     y_offset = float(MARGIN)
-    for comp in graph.C:
+    for comp in _components(gv, gedges):
         sug = SugiyamaLayout(comp)
         roots = [v for v in comp.sV if dag.in_degree(v.data) == 0]
         sug.init_all(roots=roots, inverted_edges=[e for e in inverted if e in comp.sE])
