@@ -136,15 +136,21 @@ def mckibben():
 
 
 SCHEMATICS = ("fill_time", "amplifier", "oscillator", "inverter", "demux3", "demux6")
+#: netlists with subcircuit instances: drawn as boxes (the default) and --expand
+EXPANDED = ("inverter", "demux3", "demux6", "oscillators100")
 
 
 def schematics():
-    """``pneunet draw``: the paper's circuits; the oscillator also at 12.5 s of its run."""
+    """``pneunet draw``: the paper's circuits; the oscillator also at 12.5 s of its run;
+    those with subcircuits also expanded."""
     from pneunet.cli import main
 
-    for name in SCHEMATICS:
+    for name in SCHEMATICS + EXPANDED[3:]:
         main(["draw", str(ROOT / "netlists" / f"{name}.pn"),
               "-o", str(OUT / "schematic" / f"{name}.svg")])
+    for name in EXPANDED:
+        main(["draw", str(ROOT / "netlists" / f"{name}.pn"), "--expand",
+              "-o", str(OUT / "schematic" / f"{name}_expanded.svg")])
     main(["draw", str(ROOT / "netlists" / "oscillator.pn"), "--at", "12.5s",
           "-o", str(OUT / "schematic" / "oscillator_at12.5s.svg")])
 
