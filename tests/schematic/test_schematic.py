@@ -211,6 +211,7 @@ def test_jupyter_shows_the_schematic():
     c.volume("V1", "t", V=5)
     svg = c._repr_svg_()
     assert svg.startswith("<svg") and {"PS", "R1", "V1", "s", "t"} <= set(_texts(svg))
+    assert {"INV", "X1", "X2"} <= set(_texts(parse_file(ROOT / "netlists/inverter.pn")._repr_svg_()))
 
 
 def test_a_browser_renders_the_drawing(tmp_path):
