@@ -262,6 +262,14 @@ def test_subcircuit_instances_are_boxes_wired_by_their_ports():
         (ix, iy), = _pin(lay, at, inst, "in")
         (ox, oy), = _pin(lay, at, inst, "out")
         assert sx < (box[inst][0] + box[inst][2]) / 2 < ox and ix < ox    # inputs left, out right
+        assert abs(sy - iy) >= 16 and box[inst][1] < min(sy, iy, oy)       # pins apart, inside
+    # every wire meets a box's edge head-on, at a pin
+    for net, pts, dashed in lay.wires:
+        for end, prev in ((pts[0], pts[1]), (pts[-1], pts[-2])):
+            name = next((n for n in ("X1", "X2") if min(abs(end[0] - box[n][0]),
+                                                        abs(end[0] - box[n][2])) < 0.5), None)
+            if name:
+                assert prev[1] == pytest.approx(end[1]), (net, pts)                # horizontal
     # each wire ends on its pin: X2's "in" is the dashed line from out1, X1's "out" solid
     ends = {(net, dashed): pts[-1] if pts[-1][0] > pts[0][0] else pts[0]
             for net, pts, dashed in lay.wires}
@@ -318,6 +326,22 @@ def test_a_box_with_a_source_inside_feeds_its_node_from_the_left(tmp_path):
     box = {n: b for what, n, b in lay.boxes if what == "symbol"}
     node = {n: b for what, n, b in lay.boxes if what == "node"}
     assert box["Xs"][2] < node["feed"][0] < box["R2"][0]
+
+
+def test_a_box_is_placed_where_its_wires_balance(tmp_path):
+    """A box alone in its layer sits where the rise of its wires (pin end minus node end)
+    sums to zero: the y placement pulls each pin, not the box's top, to its node."""
+    net = tmp_path / "split.pn"
+    net.write_text("P1 s 300kPa\n.subckt SPLIT a b c\nR1 a b 1\nR2 a c 1\n.ends\n"
+                   "X1 s b c SPLIT\nVb b 1mL\nVc c 1mL\n")
+    lay = parse_file(net).draw()
+    x0, y0, x1, y1 = next(b for what, n, b in lay.boxes if what == "symbol" and n == "X1")
+    rise = []
+    for net_name, pts, _ in lay.wires:
+        for end, other in ((pts[0], pts[-1]), (pts[-1], pts[0])):
+            if min(abs(end[0] - x0), abs(end[0] - x1)) < 0.5 and y0 <= end[1] <= y1:
+                rise.append(end[1] - other[1])
+    assert len(rise) == 3 and abs(sum(rise)) < 2.0 and max(map(abs, rise)) > 8  # not trivial
 
 
 def test_operating_point_on_boxes_is_their_ports_pressures(tmp_path, capsys):
