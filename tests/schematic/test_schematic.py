@@ -299,11 +299,11 @@ def test_an_array_of_instances_is_one_box_with_its_count():
 def test_nested_instances_and_ports_on_the_reference(tmp_path):
     net = tmp_path / "nested.pn"
     net.write_text("P1 s 200kPa\n.subckt LEAK a b R=1\nR1 a m {R}\nVm m 1mL\nR2 m b {R}\n.ends\n"
-                   ".subckt TWO a\nX1 a atm LEAK R=2\nX2 a 0 LEAK\n.ends\nXt s TWO\n"
+                   ".subckt TWO a\nX1 a atm LEAK R=2\nX2 a 0 LEAK\n.ends\nXt s TWO\nXa s atm LEAK\n"
                    "Xk[0:3] s k[0:3] LEAK R={index+1}\nVk[0:3] k[0:3] 1mL\n")
     deck = parse_file(net)
     assert [(i.name, i.depth) for i in deck.instances] == [
-        ("Xt", 0), ("Xt.X1", 1), ("Xt.X2", 1), ("Xk[0]", 0), ("Xk[1]", 0), ("Xk[2]", 0),
+        ("Xt", 0), ("Xt.X1", 1), ("Xt.X2", 1), ("Xa", 0), ("Xk[0]", 0), ("Xk[1]", 0), ("Xk[2]", 0),
         ("Xk[3]", 0)]
     assert next(i for i in deck.instances if i.name == "Xt").elements == (
         "Xt.X1.R1", "Xt.X1.Vm", "Xt.X1.R2", "Xt.X2.R1", "Xt.X2.Vm", "Xt.X2.R2")
@@ -311,7 +311,10 @@ def test_nested_instances_and_ports_on_the_reference(tmp_path):
     texts = _texts(lay.svg)
     assert {"Xt", "TWO", "Xk[0:3] ×4", "R=1…4", "k[0:3]"} <= set(texts) and lay.overlaps() == []
     box = {n: b for what, n, b in lay.boxes if what == "symbol"}
-    assert sorted(box) == ["P1", "Vk[0:3]", "Xk[0:3]", "Xt"]     # the nested ones inside Xt
+    assert sorted(box) == ["P1", "Vk[0:3]", "Xa", "Xk[0:3]", "Xt"]   # the nested ones inside Xt
+    # Xa's port b on the reference: an exhaust on the box's right, inside its symbol's box
+    (bx, by), = _pin(lay, _texts_at(lay.svg), "Xa", "b")
+    assert box["Xa"][2] - bx > 18
     sch = collapse(deck.circuit, deck.instances)
     assert sorted(n for p in sch.parts.values() for n in p.names) == sorted(deck.circuit.elements)
     assert box["P1"][2] < box["Xt"][0] and box["P1"][2] < box["Xk[0:3]"][0]   # loads right
