@@ -4,6 +4,8 @@ the hints, and what is opened (never followed through a link, checked by its des
 closed once).  Each test kills mutants of pneunet/netlist/includes.py that survived
 tests/netlist/test_includes.py (benchmarks/mutation.py, issue 39)."""
 import os
+import threading
+from pathlib import Path
 from types import SimpleNamespace
 
 import pytest
@@ -89,10 +91,27 @@ def test_a_name_leading_outside_here_is_still_looked_up_in_the_search_path(home)
         parse_file(home / "top.pn")
 
 
-def test_a_file_including_itself_is_caught_at_once(home):
-    err = _error(home / "top.pn", 'R1 a atm 1\n.include "top.pn"\n')
+@pytest.mark.parametrize("relative", [False, True])
+def test_a_file_including_itself_is_caught_at_once(home, monkeypatch, relative):
+    """At its own include line, not one level deeper (named absolute or relative)."""
+    monkeypatch.chdir(home)
+    (home / "top.pn").write_text('R1 a atm 1\n.include "top.pn"\n')
+    with pytest.raises(NetlistError) as info:
+        parse_file("top.pn" if relative else home / "top.pn")
+    err = info.value
     assert err.message == "recursive .include: top.pn -> top.pn"
     assert (err.span.line, err.span.column) == (2, 10)
+    assert err.span.via == () and "included from" not in err.report()
+
+
+def test_a_netlist_given_as_text_includes_from_the_working_folder_first(home, monkeypatch):
+    from pneunet.netlist import parse_netlist
+
+    monkeypatch.chdir(home)
+    (home / "v.pn").write_text("R_HERE a atm 1\n")
+    (home.parent / "shared" / "v.pn").write_text("R_SHARED a atm 1\n")
+    deck = parse_netlist('.include "v.pn"\n', include_path=[home.parent / "shared"])
+    assert set(deck.circuit.elements) == {"R_HERE"}
 
 
 def test_the_include_count_allows_its_limit_and_refuses_one_more(home):
@@ -110,12 +129,14 @@ def test_the_include_count_allows_its_limit_and_refuses_one_more(home):
     (".include", 'e.g. .include "valves.pn"'),
     ('.include "a.pn" "b.pn"', 'e.g. .include "valves.pn"'),
     ('.include "a.pn" typical', 'e.g. .include "valves.pn"'),
+    (".include a=1", 'e.g. .include "valves.pn"'),
+    (".lib", 'e.g. .include "valves.pn"'),
     ('.lib "a.pn" typical', ".lib sections are not supported; .lib FILE includes the whole file"),
     ('.lib "a.pn" "b.pn" typical', 'e.g. .include "valves.pn"'),
 ])
 def test_an_include_without_one_name_is_an_error_with_its_hint(home, line, hint):
     err = _error(home / "top.pn", line + "\n")
-    assert err.message == f"{line.split()[0]} needs one file name"
+    assert err.message == f"{line.split()[0]} needs one file name", err.message
     assert err.hint == hint and err.span.line == 1
 
 
@@ -131,13 +152,42 @@ def test_the_name_opened_is_never_followed_through_a_link(home, monkeypatch):
     assert (err.span.line, err.span.column) == (2, 10)
 
 
-def test_what_was_opened_is_where_its_descriptor_points(home):
-    """real_path follows the open file (renamed after the open), not its name."""
+@pytest.mark.parametrize("through_proc", [False, True])
+def test_what_was_opened_is_where_its_descriptor_points(home, monkeypatch, through_proc):
+    """real_path follows the open file (renamed after the open), not its name, whether the
+    name sorts after /proc/self/fd/N (/tmp/...) or before it (/proc/self/cwd/...)."""
+    monkeypatch.chdir(home)
     (home / "v.pn").write_text("R9 a atm 1\n")
-    with Opened(os.open(home / "v.pn", os.O_RDONLY), home / "v.pn") as opened:
+    name = Path("/proc/self/cwd/v.pn") if through_proc else home / "v.pn"
+    with Opened(os.open(name, os.O_RDONLY), name) as opened:
         os.rename(home / "v.pn", home / "lib" / "w.pn")
         assert opened.real_path() == home / "lib" / "w.pn"
         assert opened.read_bytes() == b"R9 a atm 1\n"
+
+
+def test_a_fifo_swapped_in_is_refused_without_blocking(home, monkeypatch):
+    """Opened with O_NONBLOCK: a FIFO in place of the checked file (no writer) is refused at
+    once as not a regular file, instead of blocking the parse forever."""
+    os.mkfifo(home / "pipe.pn")
+    monkeypatch.setattr(IncludePolicy, "resolve", lambda self, item, base: home / "pipe.pn")
+    (home / "top.pn").write_text('R1 a atm 1\n.include "v.pn"\n')
+    outcome = []
+
+    def parse():
+        try:
+            parse_file(home / "top.pn")
+        except Exception as exc:  # noqa: BLE001 - checked below
+            outcome.append(exc)
+
+    thread = threading.Thread(target=parse, daemon=True)
+    thread.start()
+    thread.join(5.0)
+    if thread.is_alive():  # blocked in open(): a writer releases it
+        os.close(os.open(home / "pipe.pn", os.O_WRONLY | os.O_NONBLOCK))
+        thread.join(5.0)
+        pytest.fail("opening the FIFO blocked")
+    assert isinstance(outcome[0], NetlistError), outcome
+    assert outcome[0].message.startswith("include 'v.pn' changed while it was opened")
 
 
 def test_an_open_file_whose_place_is_unknown_is_refused(home, monkeypatch):
