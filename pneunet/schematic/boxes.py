@@ -11,7 +11,6 @@ known: the side of the node it is wired to, pins ordered as their neighbours are
 """
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass
 
 import networkx as nx
@@ -77,10 +76,6 @@ def params_line(members) -> str:
     return " ".join(shown)
 
 
-def _port_name(pin) -> str:
-    return re.sub(r"\s+", "", pin.port)
-
-
 def finish(v, sides: dict) -> None:
     """Size box vertex ``v`` once each pin's side is known: ``sides`` maps a pin to
     ``(-1 | +1, order)``; sets ``v.pin_y`` (pin -> y from the vertex's top) and
@@ -102,8 +97,8 @@ def finish(v, sides: dict) -> None:
         for i, p in enumerate(pins):
             v.pin_y[p] = TITLE_H + PIN_GAP * (i + 0.5)
     width = max(CHAR_W * len(part.subckt) + 10,
-                CHAR_W * (max((len(_port_name(p)) for p in left), default=0)
-                          + max((len(_port_name(p)) for p in right), default=0) + 2) + 10, 48)
+                CHAR_W * (max((len(p.port) for p in left), default=0)
+                          + max((len(p.port) for p in right), default=0) + 2) + 10, 48)
     height = TITLE_H + PIN_GAP * max(len(left), len(right), 1) + 2
     rect = ("path", ((0, 0), (width, 0), (width, height), (0, height)), True, None, False)
     v.sym, v.top = Symbol(width, height, (rect,)), 0
@@ -124,8 +119,8 @@ def draw(v, sx, prims, box) -> list:
     prims.append(("text", (sx + v.sym.w / 2, v.y + TITLE_H - 4), v.part.subckt, "name"))
     for pin, side in v.pin_side.items():
         x, y = pin_point(v, sx, pin)
-        name = _port_name(pin)
-        prims.append(("text", (x - side * (CHAR_W * len(name) / 2 + 4), y + 4), name, "value"))
+        prims.append(("text", (x - side * (CHAR_W * len(pin.port) / 2 + 4), y + 4), pin.port,
+                      "value"))
         if pin.node == "atm":
             more, ebox = exhaust(x, y, 1)
             prims.extend(more)
