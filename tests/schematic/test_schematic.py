@@ -185,7 +185,9 @@ def test_bad_requests_are_exit_2_with_a_message(args, message, tmp_path, monkeyp
 def test_check_draws_before_anything_is_simulated(tmp_path, capsys):
     out = tmp_path / "demux3.svg"
     assert main(["check", str(ROOT / "netlists/demux3.pn"), "--draw", str(out)]) == 0
-    assert "Aact[0:7] ×8" in _texts(out.read_text())
+    assert {"Aact[0:7] ×8", "Xcell[0:7] ×8"} <= set(_texts(out.read_text()))
+    assert main(["check", str(ROOT / "netlists/demux3.pn"), "--draw", str(out), "--expand"]) == 0
+    assert "Xcell[0:7].Vn1 ×8" in _texts(out.read_text())
     assert main(["check", str(ROOT / "netlists/demux3.pn"), "--draw", "x.gif"]) == 2
     assert "unknown drawing format" in capsys.readouterr().err
 
