@@ -59,25 +59,53 @@ class Oscillation(Summarized):
         return d
 
 
-def _rising_crossings(t, y, level):
+def rising_crossings(t, y, level, band: float = 0.0) -> np.ndarray:
+    """Times (s) where ``y`` rises through ``level``, linear between samples.
+
+    With ``band`` > 0 (signal units: a few noise σ of a recording) a rise counts once
+    per excursion, from the last sample below ``level − band`` to the first at or above
+    ``level + band``; its time is where a straight line fitted to the samples between
+    them meets the level.  Noise riding on a falling or flat stretch near the level then
+    makes no crossing, and noise on the rise does not bias its time."""
+    t, y = np.asarray(t, float), np.asarray(y, float)
     d = y - level
+    if band > 0:
+        return _banded_rises(t, d, band)
     idx = np.nonzero((d[:-1] < 0) & (d[1:] >= 0))[0]
+    step = d[idx + 1] - d[idx]
+    frac = np.divide(-d[idx], step, out=np.zeros(idx.size), where=step != 0)
+    return t[idx] + frac * (t[idx + 1] - t[idx])
+
+
+def _banded_rises(t, d, band) -> np.ndarray:
+    """The rises of ``d`` through 0 with hysteresis ``band`` (see :func:`rising_crossings`)."""
+    below, above = np.flatnonzero(d < -band), np.flatnonzero(d >= band)
     out = []
-    for i in idx:
-        dt = t[i + 1] - t[i]
-        out.append(t[i] + (dt * (-d[i]) / (d[i + 1] - d[i]) if d[i + 1] != d[i] else 0.0))
+    k = 0
+    while k < below.size:
+        a = np.searchsorted(above, below[k])
+        if a == above.size:
+            break
+        j = above[a]
+        last = below[np.searchsorted(below, j) - 1]  # last sample below before j
+        span = slice(last, j + 1)
+        slope, icept = np.polyfit(t[span] - t[last], d[span], 1)
+        out.append(float(np.clip(t[last] - icept / slope, t[last], t[j])) if slope > 0
+                   else t[last])
+        k = np.searchsorted(below, j)
     return np.array(out)
 
 
 def analyze_oscillation(t, y=None, *, rtol: float = 1e-3, min_amplitude: float = 1.0,
-                        cycles: int = 3) -> Oscillation:
+                        cycles: int = 3, band: float = 0.0) -> Oscillation:
     """Classify the signal ``y(t)`` and measure its oscillation.
 
     The mid level is the mean of the extremes of the second half of the record;
     cycles are delimited by its rising crossings.  ``min_amplitude`` (signal units,
     kPa) is the smallest peak-to-peak counted as oscillation; ``rtol`` the relative
     change of the period and amplitude between the last two cycles below which the
-    cycle counts as converged.
+    cycle counts as converged; ``band`` the crossings' hysteresis for a noisy
+    recording (:func:`rising_crossings`).
     """
     if y is None or hasattr(t, "signals"):
         raise PneunetError("analyze_oscillation takes a time array and a signal array, "
@@ -95,7 +123,7 @@ def analyze_oscillation(t, y=None, *, rtol: float = 1e-3, min_amplitude: float =
     if hi - lo < min_amplitude:
         return Oscillation("equilibrium", nan, nan, nan, nan, final, final, final, 0, nan, nan, True)
     level = 0.5 * (lo + hi)
-    rises = _rising_crossings(t, y, level)
+    rises = rising_crossings(t, y, level, band)
     if len(rises) < 3:
         # fewer than two full cycles: a transient that has not settled yet
         kind = "undetermined"

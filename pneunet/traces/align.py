@@ -25,11 +25,13 @@ LINE_HALF_WIDTH = 2
 
 
 def crossings(t, y, level) -> np.ndarray:
-    """Times where ``y`` rises through ``level`` (linear between samples), those closer
-    than 30 % of the median spacing to the previous one dropped (noise)."""
-    from ..analysis.oscillation import _rising_crossings
+    """Times where ``y`` rises through ``level`` (linear between samples; hysteresis
+    :func:`~pneunet.traces.data.crossing_band`), those closer than 30 % of the median
+    spacing to the previous one dropped (noise)."""
+    from ..analysis.oscillation import rising_crossings
+    from .data import crossing_band
 
-    out = _rising_crossings(np.asarray(t, float), np.asarray(y, float), level)
+    out = rising_crossings(t, y, level, crossing_band(y))
     if len(out) > 2:
         gap = 0.3 * float(np.median(np.diff(out)))
         keep = [0]

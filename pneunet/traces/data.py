@@ -306,12 +306,27 @@ def oscillates(t, y) -> bool:
     return swings(y) and len(rising_crossings(t, y)) >= 3
 
 
+#: hysteresis of a recorded signal's level crossings, in its noise σ
+CROSSING_SIGMAS = 4.0
+
+
+def crossing_band(y) -> float:
+    """Hysteresis of the level crossings of a sampled signal ``y`` (its unit):
+    :data:`CROSSING_SIGMAS` × its noise (:func:`~pneunet.truth.noise.record_sigma`; 0 for
+    a simulated one).  Noise riding on a slope near the level then adds no crossing."""
+    from ..truth.noise import record_sigma
+
+    sigma = record_sigma(y)
+    return CROSSING_SIGMAS * sigma if np.isfinite(sigma) else 0.0
+
+
 def rising_crossings(t, y):
     """Times the signal rises through the middle of its range (cycle starts)."""
-    from ..analysis.oscillation import _rising_crossings
+    from ..analysis.oscillation import rising_crossings as crossings_at
 
     y = np.asarray(y, float)
-    return _rising_crossings(np.asarray(t, float), y, 0.5 * (np.min(y) + np.max(y)))
+    return crossings_at(np.asarray(t, float), y, 0.5 * (np.min(y) + np.max(y)),
+                        crossing_band(y))
 
 
 def split_by_cycles(data, node: str, train_fraction: float = 0.5, where: str = "trace"):

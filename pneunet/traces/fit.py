@@ -150,11 +150,12 @@ def _rms(v) -> float:
 
 def phase_of(t, y, level=None):
     """Oscillation phase in [0, 1) of each time from the rising crossings of ``y``."""
-    from ..analysis.oscillation import _rising_crossings
+    from ..analysis.oscillation import rising_crossings
+    from .data import crossing_band
 
     if level is None:
         level = 0.5 * (np.min(y) + np.max(y))
-    rises = _rising_crossings(np.asarray(t), np.asarray(y), level)
+    rises = rising_crossings(t, y, level, crossing_band(y))
     phase = np.full(len(t), np.nan)
     for a, b in zip(rises[:-1], rises[1:]):
         inside = (t >= a) & (t < b)
@@ -363,11 +364,12 @@ def period_error(times, ref, sol, node, mask, first_time: float = 0.0):
     """(measured, simulated, simulated − measured) period at ``node`` in ``mask``, s
     (``first_time``: the netlist time of the first sample)."""
     from ..analysis.oscillation import analyze_oscillation
+    from .data import crossing_band
     from .start import cycle_features
 
     w = mask
     try:
-        m = analyze_oscillation(times[w], ref[w])
+        m = analyze_oscillation(times[w], ref[w], band=crossing_band(ref[w]))
         sim_t = sol.t - first_time
         inside = (sim_t >= times[w][0]) & (sim_t <= times[w][-1])
         s = analyze_oscillation(sim_t[inside], sol.pressure(node)[inside]) if node else m

@@ -25,20 +25,22 @@ def cycle_features(t, y, levels=None):
     Crossing times are interpolated between samples, so the rise fraction is
     insensitive to noise; the extremes are the raw sample extremes (the relaxation
     cycle has corners there).  None if fewer than one full cycle."""
-    from ..analysis.oscillation import _rising_crossings
+    from ..analysis.oscillation import rising_crossings
+    from .data import crossing_band
 
     t = np.asarray(t, float)
     y = np.asarray(y, float)
+    band = crossing_band(y)
     if levels is None:
         half = t >= t[0] + 0.5 * (t[-1] - t[0])  # past the start-up transient
         lo_, hi_ = float(np.min(y[half])), float(np.max(y[half]))
         levels = (lo_ + 0.25 * (hi_ - lo_), lo_ + 0.75 * (hi_ - lo_))
     l1, l2 = levels
-    rises = _rising_crossings(t, y, 0.5 * (l1 + l2))
+    rises = rising_crossings(t, y, 0.5 * (l1 + l2), band)
     if len(rises) < 2:
         return None
-    up1, up2 = _rising_crossings(t, y, l1), _rising_crossings(t, y, l2)
-    dn2, dn1 = _rising_crossings(t, -y, -l2), _rising_crossings(t, -y, -l1)
+    up1, up2 = rising_crossings(t, y, l1, band), rising_crossings(t, y, l2, band)
+    dn2, dn1 = rising_crossings(t, -y, -l2, band), rising_crossings(t, -y, -l1, band)
     per, lo, hi, frac = [], [], [], []
     for a, b in zip(rises[:-1], rises[1:]):
         inside = (t >= a) & (t < b)

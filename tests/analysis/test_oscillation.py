@@ -42,3 +42,20 @@ def test_oscillator_period_reports_an_equilibrium():
     res = oscillator_period(oscillator({"Rout": 0}), "tank")
     assert res.oscillation.kind == "equilibrium"
     assert abs(res.oscillation.final - 167.484) < 0.01
+
+
+def test_crossings_with_a_band_count_one_rise_per_cycle_on_a_noisy_record():
+    """Noise riding on a slope near the level: without hysteresis it adds rises on the
+    falling edges; with a band of 4 σ only the true cycle starts remain, each within a
+    sample of the noise-free crossing (t = 10 k s for this sine)."""
+    from pneunet.analysis.oscillation import rising_crossings
+
+    t = np.linspace(0.0, 41.0, 4101)
+    noise = 0.05 * np.random.default_rng(7).standard_normal(t.size)
+    y = np.sin(2 * np.pi * t / 10.0) + noise
+    assert len(rising_crossings(t, y, 0.0)) > 4  # the falling edges' noise counts too
+    rises = rising_crossings(t, y, 0.0, band=0.2)
+    np.testing.assert_allclose(rises, [10.0, 20.0, 30.0, 40.0], atol=0.05)
+    # a falling ramp with noise around the level: no rise at all
+    ramp = 1.0 - 0.05 * t + noise
+    assert len(rising_crossings(t, ramp, 0.0, band=0.2)) == 0
