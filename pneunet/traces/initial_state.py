@@ -11,6 +11,9 @@ state compares a start-up transient with a settled recording.  Three start state
   recorded algebraic node's value picks its branch (a valve open or closed), an
   unrecorded one's branch is the one whose first samples match the record, and every
   unrecorded storage node's initial pressure is fitted with the rest (``p0@NODE``);
+  the elements' own states (a muscle's contraction and velocity, a balloon's volume)
+  at rest for those pressures (:func:`element_states`), then moved to match their
+  recorded signals (a muscle's encoder);
 * ``settled``: a circuit that oscillates on its own (constant sources) simulated from
   rest through several cycles, its settled cycle aligned in phase with the record.
 
@@ -27,11 +30,12 @@ record) is simulated on the record's own clock: the netlist time of the first sa
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from ..errors import DataError, ParameterError
+from .data import signal_unit
 
 START_MODES = ("auto", "rest", "record", "settled")
 #: most samples of the parabola whose value at t = 0 is a node's initial pressure
@@ -59,7 +63,8 @@ class StartState:
     ``guesses`` {algebraic node: kPa} that pick its branch; ``fitted`` {``p0@NODE``:
     (guess, low, high)} initial pressures fitted with the parameters; ``time_offset``
     netlist time of the first sample (s); ``settle`` s simulated before it (settled);
-    ``driven``: the sources vary during the record (no cycle alignment)."""
+    ``driven``: the sources vary during the record (no cycle alignment); ``signals``
+    {element signal: first recorded value} that set the elements' own states."""
 
     mode: str
     pressures: dict = field(default_factory=dict)
@@ -69,6 +74,7 @@ class StartState:
     settle: float = 0.0
     driven: bool = False
     reason: str = ""
+    signals: dict = field(default_factory=dict)
 
     @property
     def first_time(self) -> float:
@@ -83,6 +89,7 @@ class StartState:
             circuit.initial[node] = float(p)
         for name, (guess, _, _) in self.fitted.items():
             circuit.initial[name[len(P0_PREFIX):]] = float(values.get(name, guess))
+        circuit.initial.update(element_states(circuit, self.time_offset, self.signals))
 
     def describe(self) -> str:
         """One line for the report."""
@@ -97,6 +104,9 @@ class StartState:
                                                       for n, p in self.guesses.items()))
             if self.fitted:
                 parts.append("fitted: " + ", ".join(self.fitted))
+            if self.signals:
+                parts.append("element states from " + ", ".join(
+                    f"{n} {v:.4g} {signal_unit(n)}" for n, v in self.signals.items()))
             text = "; ".join(parts)
         elif self.mode == "settled":
             text = f"settled cycle ({self.settle:.3g} s simulated from rest, aligned in phase)"
@@ -108,7 +118,8 @@ class StartState:
         return {"mode": self.mode, "pressures": dict(self.pressures),
                 "branch_guesses": dict(self.guesses), "fitted": list(self.fitted),
                 "time_offset_s": self.time_offset, "settle_s": self.settle,
-                "driven": self.driven, "reason": self.reason}
+                "driven": self.driven, "reason": self.reason,
+                "element_signals": dict(self.signals)}
 
 
 def first_value(t, y, n: int = FIRST_SAMPLES) -> tuple[float, float]:
@@ -135,6 +146,84 @@ def first_value(t, y, n: int = FIRST_SAMPLES) -> tuple[float, float]:
             break
     cov = sigma ** 2 * np.linalg.pinv(A.T @ A)
     return float(coef[0]), float(math.sqrt(cov[0, 0]))
+
+
+def element_states(circuit, t0: float, recorded: dict | None = None) -> dict:
+    """{state node: value} of the elements' own states (``state_ports``: a muscle's
+    contraction and velocity, a balloon's volume) at netlist time ``t0`` (s) for the
+    pressures of ``circuit.initial``: at rest for them (every rate zero: a muscle where
+    its force balances its load, a balloon at its pressure's volume), then, for an
+    element with a signal in ``recorded`` ({``contraction_M1``: mm, …} at ``t0``), its
+    states moved by least squares until its signals match (the states a signal does not
+    see, a muscle's velocity, keep their rest values).  Empty without such elements."""
+    from scipy import optimize
+
+    from ..engine.assembly import CircuitDAE
+    from ..engine.single_rate import pseudo_capacitance, residual_and_jacobian
+    from ..engine.solvers.newton import newton
+
+    dae = CircuitDAE(circuit)
+    states = [dae.node_names.index(n) for n in sorted(dae.state_nodes)]
+    if not states:
+        return {}
+    y = dae.initial_state(t0)
+    active = np.union1d(states, dae.algebraic_idx)
+    result = newton(residual_and_jacobian(dae, t0), y, active,
+                    capacitance=pseudo_capacitance(dae, t0, y))
+    if result.converged:
+        y = result.y
+    seen = _signals_at(dae, t0, y, recorded or {})
+    if seen:
+        owners = {spec.name for spec in circuit.elements.values()
+                  if any(name.endswith("_" + spec.name) for name in seen)}
+        free = [dae.node_names.index(spec.nodes[p]) for spec in circuit.elements.values()
+                if spec.name in owners
+                for p in _family(spec.kind).state_ports]
+        target = np.array([recorded[n] for n in seen])
+
+        def miss(z):
+            trial = y.copy()
+            trial[free] = z
+            return np.array(list(_signals_at(dae, t0, trial, recorded).values())) - target
+
+        fit = optimize.least_squares(miss, y[free], bounds=(1e-6, np.inf), x_scale=1.0)
+        y[free] = fit.x
+    return {dae.node_names[i]: float(y[i]) for i in states}
+
+
+def _family(kind):
+    from .. import elements
+
+    return elements.family(kind)
+
+
+def _signals_at(dae, t0, y, wanted) -> dict:
+    """{signal: value} of the ``wanted`` element signals at state ``y`` (time ``t0``)."""
+    if not wanted:
+        return {}
+    t, states = np.array([float(t0)]), y[None, :]
+    full = dae.full_pressures(t, states)
+    out = {}
+    for names, _, compute in dae.element_signal_groups(t, states, lambda: full):
+        if any(n in wanted for n in names):
+            out.update({n: float(v[0]) for n, v in compute().items() if n in wanted})
+    return {n: out[n] for n in wanted if n in out}
+
+
+def _recorded_states(circuit, data) -> dict:
+    """{element signal: value at the first sample} of the recorded columns of elements
+    that carry their own states (a muscle's contraction, force or volume)."""
+    from .data import element_column, signal_of_column
+
+    stateful = {spec.name for spec in circuit.elements.values()
+                if _family(spec.kind).state_ports}
+    times = data["time_s"].to_numpy()
+    out = {}
+    for col in data.columns:
+        ref = element_column(col)
+        if ref is not None and ref.stem.partition("_")[2] in stateful:
+            out[signal_of_column(col)] = first_value(times, data[col].to_numpy())[0]
+    return out
 
 
 def sources_vary(circuit, t0: float, t1: float, points: int = 400) -> bool:
@@ -207,7 +296,8 @@ def choose_start(model, values: dict, data, mode: str = "auto",
         reason = f"the first samples are off the rest state: {first}"
     else:
         reason = "forced"
-    state = StartState("record", pressures, guesses, fitted, offset, 0.0, driven, reason)
+    state = StartState("record", pressures, guesses, fitted, offset, 0.0, driven, reason,
+                       _recorded_states(circuit, data))
     unrecorded = [n for n in algebraic if n not in guesses]
     if unrecorded:
         state = _pick_branches(model, values, data, state, unrecorded, rest)
@@ -310,9 +400,7 @@ def _pick_branches(model, values, data, state, nodes, rest) -> StartState:
                      + list(state.guesses.values())})
     roots, states = [], []
     for level in levels:
-        trial = StartState("record", state.pressures, {**state.guesses,
-                                                        **{n: level for n in nodes}},
-                           state.fitted, state.time_offset, 0.0, state.driven, state.reason)
+        trial = replace(state, guesses={**state.guesses, **{n: level for n in nodes}})
         try:
             circuit = model.with_state(trial).circuit(values)
             dae = CircuitDAE(circuit)
@@ -323,9 +411,8 @@ def _pick_branches(model, values, data, state, nodes, rest) -> StartState:
         if any(np.allclose(root, r, atol=REST_TOLERANCE_KPA) for r in roots):
             continue
         roots.append(root)
-        trial = StartState("record", state.pressures,
-                           {**state.guesses, **{n: float(v) for n, v in zip(nodes, root)}},
-                           state.fitted, state.time_offset, 0.0, state.driven, state.reason)
+        trial = replace(state, guesses={**state.guesses,
+                                        **{n: float(v) for n, v in zip(nodes, root)}})
         try:
             sol = model.with_state(trial).simulate(values, float(times[k - 1]))
         except PneunetError:
