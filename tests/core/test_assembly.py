@@ -178,6 +178,7 @@ def test_algebraic_block_is_the_algebraic_rows_of_the_full_system():
     for limit in (40, 0):
         block = AlgebraicBlock(dae, dense_limit=limit)
         res, jac, scale = block.evaluate(2.0, y)
+        assert isinstance(jac, np.ndarray) == (limit > 0)  # dense up to the limit, else CSC
         jac = jac if isinstance(jac, np.ndarray) else jac.toarray()
         assert res == pytest.approx([f_b], rel=1e-12)
         assert jac.shape == (1, 1) and jac[0, 0] == pytest.approx(full[b, b], rel=1e-12)
@@ -185,11 +186,89 @@ def test_algebraic_block_is_the_algebraic_rows_of_the_full_system():
         assert scale == pytest.approx([sum(abs(s) for s in slopes)], rel=1e-6)
 
 
+def test_an_algebraic_block_without_algebraic_nodes_is_empty():
+    block = AlgebraicBlock(CircuitDAE(_circuit(dead_volume=0.5)))
+    res, jac, scale = block.evaluate(0.0, np.full(3, 150.0))
+    assert block.size == 0 and res.size == 0 and jac.shape == (0, 0) and scale.size == 0
+
+
 def test_breakpoints_equal_up_to_rounding_are_one():
+    """Merged when 1e-12 relative apart (of the time, at least 1 s) or closer."""
     np.testing.assert_array_equal(distinct_times([np.array([16 + 0.01, 3.0]),
                                                   np.array([2 * 8 + 0.01])]), [3.0, 16.01])
     np.testing.assert_array_equal(distinct_times([np.array([1.0, 1.0 + 1e-9])]),
                                   [1.0, 1.0 + 1e-9])
+    np.testing.assert_array_equal(distinct_times([np.array([0.3]), np.array([0.1 * 3])]), [0.3])
+    np.testing.assert_array_equal(distinct_times([np.array([1000.0, 1000.0 + 1e-10])]),
+                                  [1000.0])
+    np.testing.assert_array_equal(distinct_times([np.array([1000.0, 1000.0 + 1e-8])]),
+                                  [1000.0, 1000.0 + 1e-8])
     assert distinct_times([]).size == 0
     dae = CircuitDAE(_circuit())
     np.testing.assert_array_equal(dae.jumps(0.0, 5.0), [1.0])
+
+
+def test_each_source_delivers_the_flow_of_its_own_node():
+    c = Circuit("two sources", ambient=AMB, flow_band=BAND)
+    c.pressure_source("PA", "s1", 300.0)
+    c.pressure_source("PB", "s2", Step(150.0, 250.0, at=1.0))
+    c.resistor("R1", "s1", "m", R=R1)
+    c.resistor("R2", "s2", "m", R=R2)
+    c.resistor("R3", "m", "atm", R=R3)
+    dae = CircuitDAE(c)
+    times = np.array([0.5, 2.0])
+    full = dae.full_pressures(times, np.array([[180.0], [220.0]]))
+    flows = dae.source_flows(times, full)
+    m = np.array([180.0, 220.0])
+    np.testing.assert_allclose(flows["PA"], _q(300.0, m, R1), rtol=1e-12)
+    np.testing.assert_allclose(flows["PB"], _q(np.array([150.0, 250.0]), m, R2), rtol=1e-12)
+
+
+def test_consistent_rates_solve_a_coupled_mass_matrix():
+    """A thermal volume's storage couples its pressure and temperature nodes (off-diagonal
+    ∂F/∂ẏ): the rates derivative() returns make the differential residuals zero (at a state
+    where the residual is linear in ẏ: the gas flows out, at the wall temperature)."""
+    c = Circuit("thermal", ambient=AMB)
+    c.pressure_source("P1", "a", 250.0)
+    c.resistor("R1", "a", "b", R=1.0)
+    c.add("thermal_volume", "VT1", ("b", "bT"), V=30.0, tau=0.5, p0=150.0)
+    dae = CircuitDAE(c)
+    y = np.array([260.0, 150.0])
+    mass = dae.mass_matrix(0.0, y).toarray()
+    assert abs(mass[0, 1]) + abs(mass[1, 0]) > 0
+    ydot = dae.derivative(0.0, y)
+    assert np.abs(ydot).min() > 1.0
+    np.testing.assert_allclose(dae.evaluate(0.0, y, ydot)[0], 0.0, atol=1e-9)
+
+
+def test_a_circuit_is_validated_unless_told_not_to():
+    from pneunet import TopologyError
+
+    c = _circuit()
+    c.resistor("R9", "x", "y", R=1.0)  # x, y: no path to a pressure
+    with pytest.raises(TopologyError):
+        CircuitDAE(c)
+    assert CircuitDAE(c, validate=False).n == 5
+
+
+def test_an_initial_pressure_on_a_source_node_is_left_to_the_source():
+    c = _circuit()
+    c.set_initial("s", 250.0)
+    assert _by_name(dae := CircuitDAE(c), dae.initial_state(0.0))["a"] == 150.0
+
+
+def test_element_signals_are_read_only_and_name_no_dead_volume():
+    dae = CircuitDAE(_circuit(dead_volume=0.5))
+    times = np.array([0.5, 2.0])
+    states = np.random.default_rng(9).uniform(120.0, 320.0, (2, dae.n))
+    full = dae.full_pressures(times, states)
+    groups = dae.element_signal_groups(times, states, lambda: full)
+    names = [n for names, _, _ in groups for n in names]
+    assert "mdot_R1" in names and not any("_dead_" in n for n in names)
+    computed = {k: v for _, _, compute in groups for k, v in compute().items()}
+    assert set(computed) == set(names)
+    a, s = states[:, dae.node_index("a")], full[:, dae.node_index("s")]
+    np.testing.assert_allclose(computed["mdot_R1"], _q(s, a, R1), rtol=1e-12)
+    for block in dae._blocks:
+        for unit, values in dae.element_signals(block, times, full).values():
+            assert values.shape == (2,) and not values.flags.writeable
