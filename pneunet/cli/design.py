@@ -5,7 +5,7 @@ import json
 
 from . import netlist_args
 from .executors import add_executor_args
-from .numbers import whole, within
+from .numbers import real, whole, within
 from .outputs import output_file
 
 
@@ -45,6 +45,11 @@ def register(subparsers) -> None:
                    help="Monte Carlo samples of the spread at the design (or, without "
                         "--vary, at the netlist's values): yield with its standard error, "
                         "sensitivities")
+    y.add_argument("--yield-se", dest="yield_se", type=_standard_error, default=None,
+                   metavar="SE",
+                   help="stop sampling once the yield is known this well: the 95%% Wilson "
+                        "interval's half-width at most 1.96·SE (a fraction: 0.02 for ±2%%); "
+                        "--yield N is then the most samples (default: all N)")
     y.add_argument("--tolerance", action="append", default=[], metavar="NAME=±X",
                    help="a stated spread, e.g. X1.pclose=±5kPa or X1.e=±5%%; repeatable")
     y.add_argument("--tolerance-dist", choices=["uniform", "normal"], default="uniform",
@@ -88,6 +93,9 @@ def main(args) -> int:
         raise ParameterError("no target given", hint="e.g. --target period=3s")
     if (tolerances or fits) and not args.n_yield:
         raise ParameterError("--tolerance/--fit need --yield N (Monte Carlo samples)")
+    if args.yield_se is not None and not args.n_yield:
+        raise ParameterError("--yield-se needs --yield N (the most samples to draw)",
+                             hint="e.g. --yield 1000 --yield-se 0.02")
     for path, what in ((args.tornado, "tornado plot"), (args.samples, "samples table")):
         if path:
             check_writable(path, what, "choose a writable file")
@@ -110,7 +118,8 @@ def main(args) -> int:
                 spread = combined(problem, result.values, tolerances, fits,
                                   args.tolerance_dist)
                 y = yield_analysis(problem, result.values, spread, args.n_yield, args.seed,
-                                   nominal=result.metrics, derivatives=args.derivatives)
+                                   nominal=result.metrics, derivatives=args.derivatives,
+                                   se=args.yield_se)
         if args.n_yield:
             out["yield"] = y.to_json()
             if args.tornado:
@@ -128,6 +137,17 @@ def main(args) -> int:
                 if key in out["yield"]:
                     print(f"{key} -> {out['yield'][key]}")
     return 0 if result.met else 1
+
+
+def _standard_error(text: str) -> float:
+    """--yield-se: a fraction 0 < SE < 0.5."""
+    import argparse
+
+    try:
+        return real(above=0, below=0.5)(text)
+    except argparse.ArgumentTypeError as err:
+        raise argparse.ArgumentTypeError(f"{err} (the yield's standard error as a fraction, "
+                                         "e.g. 0.02 for ±2 %)") from None
 
 
 def _element_file(text: str) -> tuple:

@@ -6,6 +6,12 @@ failed simulation or an unmeasured metric fails).  The yield p = passed/n is rep
 with its Monte Carlo standard error √(p(1−p)/n) and the 95 % Wilson score interval, the
 pass fraction of every target, and the sensitivities of each target's metric
 (:mod:`~pneunet.design.sensitivity`).
+
+With ``se`` the samples are simulated in batches, in the order drawn, and sampling stops
+as soon as the Wilson interval's half-width is at most 1.96·se (the half-width of a
+normal 95 % interval with that standard error): the result is that of the first samples
+of the full run (the same seed), and ``n`` is then the most samples drawn.  Each batch is
+sized from the yield so far to reach the width in one more step (:func:`_next_batch`).
 """
 from __future__ import annotations
 
@@ -20,6 +26,10 @@ from .spec import require_whole
 
 #: parameters per metric in the text report
 TOP = 3
+#: the 95 % normal quantile: the interval's half-width asked for is Z·se
+Z = 1.959963984540054
+#: samples of the first batch, and at least per later batch, when sampling stops early
+FIRST_BATCH, MIN_BATCH = 64, 16
 
 
 def wilson(passed: int, n: int) -> tuple:
@@ -28,6 +38,40 @@ def wilson(passed: int, n: int) -> tuple:
 
     ci = binomtest(passed, n).proportion_ci(0.95, method="wilson")
     return (float(ci.low), float(ci.high))
+
+
+def _half_width(p: float, n: float) -> float:
+    """Half-width of the 95 % Wilson interval at a yield p over n samples (closed form)."""
+    return Z * math.sqrt(p * (1 - p) / n + Z * Z / (4 * n * n)) / (1 + Z * Z / n)
+
+
+def _next_batch(passed: int, done: int, se: float, n_max: int) -> int:
+    """Samples to simulate next: as many as the yield so far needs to bring the interval's
+    half-width down to Z·se (at least MIN_BATCH, at most what is left of n_max)."""
+    if done == 0:
+        return min(FIRST_BATCH, n_max)
+    p, low, high = passed / done, done, n_max
+    while low < high:  # the fewest samples whose half-width at p is narrow enough
+        mid = (low + high) // 2
+        low, high = (low, mid) if _half_width(p, mid) <= Z * se else (mid + 1, high)
+    return min(max(low - done, MIN_BATCH), n_max - done)
+
+
+def _sample(problem: Problem, points: list, se: float | None) -> list:
+    """Evaluated rows of ``points`` (all of them, or the first until the interval is
+    as narrow as ``se`` asks)."""
+    if se is None:
+        return problem.evaluate(points)
+    rows, passed = [], 0
+    while len(rows) < len(points):
+        batch = problem.evaluate(points[len(rows):len(rows) +
+                                        _next_batch(passed, len(rows), se, len(points))])
+        rows += batch
+        passed += sum(problem.met(problem.metrics(r)) for r in batch)
+        low, high = wilson(passed, len(rows))
+        if (high - low) / 2 <= Z * se:
+            break
+    return rows
 
 
 @dataclass(repr=False)
@@ -54,6 +98,8 @@ class YieldResult(Summarized):
     seed: int
     simulations: int
     wall_time_s: float
+    se_target: float | None = None
+    n_max: int | None = None
 
     def _summary(self):
         rows = [("yield", f"{100 * self.yield_:.1f} % ± {100 * self.se:.1f} % "
@@ -82,6 +128,7 @@ class YieldResult(Summarized):
                 dict(zip(("parameter", "metric"), self.limiting_parameter)),
                 "spread": self.spread,
                 "sensitivities": table.to_dict(orient="records"), "notes": self.notes,
+                "se_target": self.se_target, "n_max": self.n_max,
                 "simulations": self.simulations, "wall_time_s": round(self.wall_time_s, 3)}
 
     def report(self) -> str:
@@ -89,6 +136,14 @@ class YieldResult(Summarized):
         lines = [f"yield {100 * self.yield_:.1f} % ± {100 * self.se:.1f} % (Monte Carlo SE; "
                  f"95 % Wilson {100 * lo:.1f}–{100 * hi:.1f} %): {self.passed} of {self.n} "
                  f"samples meet every target"]
+        if self.se_target is not None:
+            lines.append(f"  sampling stopped at {self.n} of at most {self.n_max} samples"
+                         f" (asked: SE {100 * self.se_target:.3g} %, Wilson half-width "
+                         f"≤ {100 * Z * self.se_target:.3g} %)" if self.n < self.n_max else
+                         f"  all {self.n_max} samples drawn: the Wilson half-width "
+                         f"{50 * (hi - lo):.3g} % is wider than the "
+                         f"{100 * Z * self.se_target:.3g} % asked (--yield-se "
+                         f"{self.se_target:g}; draw more with --yield)")
         lines += [f"  {k:<24} {100 * v:.1f} % pass" for k, v in self.per_target.items()]
         if self.failed_simulations:
             lines.append(f"  {self.failed_simulations} simulations failed (counted as misses)")
@@ -118,20 +173,31 @@ class YieldResult(Summarized):
 
 
 def yield_analysis(problem: Problem, values: dict, spread, n: int = 1000, seed: int = 0,
-                   nominal: dict | None = None, derivatives: bool = False) -> YieldResult:
+                   nominal: dict | None = None, derivatives: bool = False,
+                   se: float | None = None) -> YieldResult:
     """Monte Carlo yield of the design ``values`` under ``spread`` (module docstring);
     ``problem`` runs the simulations (use it as a context manager for one pool);
     ``nominal`` the metrics at the design (simulated if not given); ``derivatives``: add
-    the central-difference effects (column ``effect_fd``, 2 simulations per parameter)."""
+    the central-difference effects (column ``effect_fd``, 2 simulations per parameter);
+    ``se``: the standard error asked (a fraction, 0 < se < 0.5): stop once the Wilson
+    interval's half-width is at most 1.96·se, ``n`` being the most samples (None: all n)."""
     import pandas as pd
 
     require_whole("yield: the number of samples (--yield)", n, 1)
     require_whole("yield: seed", seed, 0)
+    if se is not None and not (isinstance(se, (int, float)) and 0 < se < 0.5):
+        from ..errors import ParameterError
+
+        raise ParameterError(f"yield: the standard error asked (--yield-se) must be a "
+                             f"fraction between 0 and 0.5, got {se!r}",
+                             hint="e.g. 0.02 for a yield known to about ±2 % (±3.9 % at 95 %)")
     start, sims = time.perf_counter(), problem.simulations
     if nominal is None:
         nominal = problem.metrics(problem.evaluate([dict(values)])[0])
+    n_max = n
     points = [dict(values, **s) for s in spread.sample(n, seed)]
-    rows = problem.evaluate(points)
+    rows = _sample(problem, points, se)
+    n = len(rows)  # the table pairs the first n points with their rows
     table = pd.DataFrame([dict(p, **problem.metrics(r), error=r.get("error"))
                           for p, r in zip(points, rows)])
     keys = [t.key for t in problem.targets]
@@ -150,4 +216,4 @@ def yield_analysis(problem: Problem, values: dict, spread, n: int = 1000, seed: 
                        samples=table, spread=spread.describe(), notes=list(spread.notes),
                        nominal=nominal, units={t.key: t.unit for t in problem.targets},
                        seed=seed, simulations=problem.simulations - sims,
-                       wall_time_s=time.perf_counter() - start)
+                       wall_time_s=time.perf_counter() - start, se_target=se, n_max=n_max)

@@ -10,6 +10,7 @@ import pytest
 
 from pneunet import measure
 from pneunet.cli import main
+from pneunet.errors import ParameterError
 from pneunet.netlist import parse_file
 
 
@@ -98,7 +99,64 @@ def test_yield_under_a_fitted_covariance(short_oscillator, tmp_path, capsys):
     assert table["X1.pclose"].nunique() == 6 and out["n"] == 6
 
 
+def rc_fill(point):
+    """A 1 L tank filled from 200 kPa through R (kPa·s/mg): p(0.2 s) falls as R grows."""
+    from pneunet import Circuit
+
+    c = Circuit("rc_fill", ambient=96.0)
+    c.pressure_source("PS", "supply", 200.0)
+    c.resistor("R1", "supply", "tank", R=point["R"])
+    c.volume("V1", "tank", V=1000.0)
+    return c
+
+
+def test_yield_se_stops_once_the_interval_is_as_narrow_as_asked():
+    """--yield-se: the early stop's Wilson interval is at most ±1.96·SE wide, its samples
+    are the full run's first ones (simulated once), and its yield agrees with the full
+    run's within the sampling error of the samples it left out."""
+    from pneunet.analysis.sweep import tolerance
+    from pneunet.design.problem import Problem
+    from pneunet.design.spread import Spread
+    from pneunet.design.yields import yield_analysis
+
+    n_max, se, z = 150, 0.04, 1.959963984540054
+    spread = Spread(independent={"R": tolerance(1.0, 0.5)})  # uniform 0.5–1.5
+    problem = Problem(rc_fill, ["p_max@tank>=100kPa"], t_stop=0.2, workers=1)
+    for bad in (0, 0.5, -0.1, math.nan, "0.02"):
+        with pytest.raises(ParameterError, match="--yield-se.*between 0 and 0.5"):
+            yield_analysis(problem, {}, spread, n=n_max, se=bad)
+    assert problem.simulations == 0
+    early = yield_analysis(problem, {}, spread, n=n_max, seed=1, nominal={}, se=se)
+    low, high = wilson_textbook(early.passed, early.n)
+    assert early.interval == pytest.approx((low, high), abs=1e-12)
+    assert (high - low) / 2 <= z * se
+    assert 0 < early.passed < early.n < n_max and early.simulations == early.n
+    assert (early.se_target, early.n_max) == (se, n_max)
+    assert f"stopped at {early.n} of at most {n_max}" in early.report()
+    full = yield_analysis(problem, {}, spread, n=n_max, seed=1, nominal={})
+    assert full.simulations == n_max - early.n  # the early samples came from the cache
+    assert np.array_equal(full.samples["R"][:early.n], early.samples["R"])
+    assert np.array_equal(full.samples["pass"][:early.n], early.samples["pass"])
+    p = full.yield_
+    assert 0.1 < p < 0.9
+    assert abs(early.yield_ - p) <= 3 * math.sqrt(p * (1 - p) * (1 / early.n - 1 / n_max))
+    # it went on past its first batch (64 samples) because that one was not narrow enough
+    first = int(early.samples["pass"][:64].sum())
+    low64, high64 = wilson_textbook(first, 64)
+    assert early.n > 64 and (high64 - low64) / 2 > z * se
+
+
+def test_yield_se_without_yield_is_exit_2(short_oscillator, capsys):
+    argv = ["design", str(short_oscillator), "--target", "period=3s", "--yield-se", "0.02"]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "--yield-se needs --yield N" in err and "Traceback" not in err
+
+
 @pytest.mark.parametrize("args, message", [
+    (["--yield-se", "0"], "argument --yield-se: 0: must be > 0 (the yield's standard error"),
+    (["--yield-se", "2%"], "argument --yield-se: '2%' is not a number"),
+    (["--yield-se", "0.5"], "must be < 0.5"),
     ([], "the .model cards carry no uncertainty (valves: X1 (axi_0p6mm))"),
     (["--tolerance", "X1.pclos=±5kPa"], "did you mean 'pclose'?"),
     (["--tolerance", "X1.pclose=5kPa"], "cannot read tolerance"),
