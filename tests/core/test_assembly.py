@@ -209,9 +209,14 @@ def test_breakpoints_equal_up_to_rounding_are_one():
 
 
 def test_each_source_delivers_the_flow_of_its_own_node():
+    """At zero rates of change: a volume on a source node stores nothing here (and its p0
+    does not set the source's pressure); a family with no port at a source (the volume at m,
+    added first) is passed over, not the end of the sum."""
     c = Circuit("two sources", ambient=AMB, flow_band=BAND)
     c.pressure_source("PA", "s1", 300.0)
     c.pressure_source("PB", "s2", Step(150.0, 250.0, at=1.0))
+    c.volume("Vm", "m", V=V1, p0=170.0)
+    c.volume("Vs", "s2", V=V2, p0=400.0)
     c.resistor("R1", "s1", "m", R=R1)
     c.resistor("R2", "s2", "m", R=R2)
     c.resistor("R3", "m", "atm", R=R3)
@@ -222,6 +227,7 @@ def test_each_source_delivers_the_flow_of_its_own_node():
     m = np.array([180.0, 220.0])
     np.testing.assert_allclose(flows["PA"], _q(300.0, m, R1), rtol=1e-12)
     np.testing.assert_allclose(flows["PB"], _q(np.array([150.0, 250.0]), m, R2), rtol=1e-12)
+    assert dae.node_names == ["m"] and dae.initial_state(0.0).tolist() == [170.0]
 
 
 def test_consistent_rates_solve_a_coupled_mass_matrix():
@@ -272,3 +278,26 @@ def test_element_signals_are_read_only_and_name_no_dead_volume():
     for block in dae._blocks:
         for unit, values in dae.element_signals(block, times, full).values():
             assert values.shape == (2,) and not values.flags.writeable
+
+
+def test_a_storage_element_with_two_nodes_starts_each_at_its_own_pressure():
+    """pv_volume with the volume as state: its node at P(V0) = 200 kPa (a table point), its
+    state node at ambient + V0 = 115."""
+    c = Circuit("pv", ambient=100.0)
+    c.pressure_source("P1", "a", 250.0)
+    c.resistor("R2", "a", "d", R=1.0)
+    c.pv_volume("A2", "d", table=([110.0, 260.0, 200.0, 300.0], [1.0, 5.0, 15.0, 35.0]),
+                V0=15.0)
+    dae = CircuitDAE(c)
+    assert _by_name(dae, dae.initial_state(0.0)) == {"d": 200.0, "A2.V": 115.0}
+
+
+def test_instance_corners_name_each_timed_element_once_per_window():
+    dae = CircuitDAE(_circuit())
+    corners = dae.instance_corners(0.0, 5.0)
+    assert sorted(corners) == ["F1", "P1"]  # the sources' waveforms (F1's is constant)
+    np.testing.assert_array_equal(corners["P1"][0], [1.0])
+    np.testing.assert_array_equal(corners["P1"][1], [1.0])
+    assert corners["F1"][0].size == corners["F1"][1].size == 0
+    assert dae.instance_corners(0.0, 5.0) is corners  # kept for the window
+    assert dae.instance_corners(2.0, 5.0)["P1"][0].size == 0
