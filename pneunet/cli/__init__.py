@@ -20,7 +20,11 @@ SUBCOMMAND_MODULES = ("run", "check", "draw", "fit", "diagnose", "sweep", "branc
                        "fit_trace", "design", "piping")
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The parser of every sub-command, or of ``command`` alone when it names one (a run
+    then imports only its own module: ``pneunet run`` never loads the fitting code)."""
+    by_command = {name.replace("_", "-"): name for name in SUBCOMMAND_MODULES}
+    names = [by_command[command]] if command in by_command else SUBCOMMAND_MODULES
     parser = argparse.ArgumentParser(
         prog="pneunet",
         description="Simulate pneumatic circuits of fluid-driven membrane valves, "
@@ -31,7 +35,7 @@ def build_parser() -> argparse.ArgumentParser:
     from .. import __version__
     parser.add_argument("--version", action="version", version=f"pneunet {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for name in SUBCOMMAND_MODULES:
+    for name in names:
         try:
             module = importlib.import_module(f".{name}", __name__)
         except ModuleNotFoundError as exc:
@@ -45,7 +49,8 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     from ..errors import PneunetError, printable
 
-    parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    parser = build_parser(argv[0] if argv else None)
     try:
         with _wrapped("stderr", _PrintableStderr):  # argparse quotes the user's text in its errors
             args = parser.parse_args(argv)
