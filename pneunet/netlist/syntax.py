@@ -126,14 +126,38 @@ class SourceText:
 # -- lark -----------------------------------------------------------------------------
 @functools.lru_cache(maxsize=1)
 def lark_parser():
-    """The shared LALR parser (netlist and expression start symbols)."""
+    """The shared LALR parser (netlist and expression start symbols).  Building its
+    tables costs a process ~0.1 s; lark keeps them in :func:`grammar_cache` (checked
+    against the grammar's, the options' and lark's own hash, rebuilt when one changed)."""
     from importlib.resources import files
 
     from lark import Lark
 
     grammar = files("pneunet.netlist").joinpath("grammar.lark").read_text(encoding="utf-8")
     return Lark(grammar, parser="lalr", start=["netlist", "expr"], propagate_positions=True,
-                maybe_placeholders=False)
+                maybe_placeholders=False, cache=grammar_cache())
+
+
+def grammar_cache():
+    """The file of the built parser tables, in the user's own cache folder
+    (``$XDG_CACHE_HOME/pneunet``, default ``~/.cache/pneunet``, created private); False
+    (no cache) when that folder cannot be made or others could write to it: the file is a
+    pickle, read only from a folder no one else controls."""
+    import os
+    import stat
+
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    folder = os.path.join(base, "pneunet")
+    try:
+        os.makedirs(folder, mode=0o700, exist_ok=True)
+        info = os.stat(folder)
+    except (OSError, ValueError):
+        return False
+    mine = not hasattr(os, "getuid") or info.st_uid == os.getuid()
+    if not (mine and stat.S_ISDIR(info.st_mode) and not info.st_mode & 0o022
+            and os.access(folder, os.W_OK)):
+        return False
+    return os.path.join(folder, "netlist-grammar.lark-cache")
 
 
 _COMMENT_LINE = re.compile(r"^[ \t]*\*")
