@@ -186,6 +186,22 @@ def test_algebraic_block_is_the_algebraic_rows_of_the_full_system():
         assert scale == pytest.approx([sum(abs(s) for s in slopes)], rel=1e-6)
 
 
+def test_algebraic_block_with_one_fixed_node_and_other_families_first():
+    """Only atm is fixed (a flow source drives a); the volume and the flow source, added
+    first, have no port at the algebraic node b."""
+    c = Circuit("one fixed node", ambient=AMB, flow_band=BAND)
+    c.volume("V1", "a", V=V1)
+    c.flow_source("F1", "atm", "a", FLOW)
+    c.resistor("R2", "a", "b", R=R2)
+    c.resistor("R3", "b", "atm", R=R3)
+    dae = CircuitDAE(c)
+    assert dae.fixed_names == ["atm"] and dae.n == 2
+    p = {"a": 260.0, "b": 170.0}
+    res, jac, _ = AlgebraicBlock(dae).evaluate(0.0, _vector(dae, p))
+    assert res == pytest.approx([_q(170.0, 260.0, R2) + _q(170.0, AMB, R3)], rel=1e-12)
+    assert jac.shape == (1, 1)
+
+
 def test_an_algebraic_block_without_algebraic_nodes_is_empty():
     block = AlgebraicBlock(CircuitDAE(_circuit(dead_volume=0.5)))
     res, jac, scale = block.evaluate(0.0, np.full(3, 150.0))
@@ -203,6 +219,11 @@ def test_breakpoints_equal_up_to_rounding_are_one():
                                   [1000.0])
     np.testing.assert_array_equal(distinct_times([np.array([1000.0, 1000.0 + 1e-8])]),
                                   [1000.0, 1000.0 + 1e-8])
+    np.testing.assert_array_equal(distinct_times([np.array([3.0, 1000.0, 1000.0 + 1e-10])]),
+                                  [3.0, 1000.0])
+    np.testing.assert_array_equal(distinct_times([np.array([1.5, 1.5 + 1.8e-12])]),
+                                  [1.5, 1.5 + 1.8e-12])  # 1.5e-12 apart at most
+    np.testing.assert_array_equal(distinct_times([np.array([1e-3, 1e-3 + 1e-14])]), [1e-3])
     assert distinct_times([]).size == 0
     dae = CircuitDAE(_circuit())
     np.testing.assert_array_equal(dae.jumps(0.0, 5.0), [1.0])
