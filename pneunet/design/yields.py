@@ -137,12 +137,12 @@ class YieldResult(Summarized):
                  f"95 % Wilson {100 * lo:.1f}–{100 * hi:.1f} %): {self.passed} of {self.n} "
                  f"samples meet every target"]
         if self.se_target is not None:
-            lines.append(f"  sampling stopped at {self.n} of at most {self.n_max} samples"
-                         f" (asked: SE {100 * self.se_target:.3g} %, Wilson half-width "
-                         f"≤ {100 * Z * self.se_target:.3g} %)" if self.n < self.n_max else
+            half, asked = 50 * (hi - lo), 100 * Z * self.se_target
+            lines.append(f"  sampling stopped at {self.n} of at most {self.n_max} samples: "
+                         f"Wilson half-width {half:.3g} % ≤ {asked:.3g} % (--yield-se "
+                         f"{self.se_target:g})" if half <= asked else
                          f"  all {self.n_max} samples drawn: the Wilson half-width "
-                         f"{50 * (hi - lo):.3g} % is wider than the "
-                         f"{100 * Z * self.se_target:.3g} % asked (--yield-se "
+                         f"{half:.3g} % is wider than the {asked:.3g} % asked (--yield-se "
                          f"{self.se_target:g}; draw more with --yield)")
         lines += [f"  {k:<24} {100 * v:.1f} % pass" for k, v in self.per_target.items()]
         if self.failed_simulations:

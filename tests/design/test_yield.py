@@ -144,6 +144,9 @@ def test_yield_se_stops_once_the_interval_is_as_narrow_as_asked():
     first = int(early.samples["pass"][:64].sum())
     low64, high64 = wilson_textbook(first, 64)
     assert early.n > 64 and (high64 - low64) / 2 > z * se
+    short = yield_analysis(problem, {}, spread, n=16, seed=1, nominal={}, se=se)
+    assert (short.n, short.simulations) == (16, 0)  # the same first 16 samples, cached
+    assert "all 16 samples drawn: the Wilson half-width" in short.report()
 
 
 def test_yield_se_without_yield_is_exit_2(short_oscillator, capsys):
