@@ -2,6 +2,8 @@
 
     python benchmarks/bench_small.py                   # 3 circuits + demux6, 5 repeats
     python benchmarks/bench_small.py --repeats 7 --no-demux6
+    git archive COMMIT | tar -x -C /tmp/base           # an earlier tree, then (issue 35):
+    python benchmarks/bench_small.py --only oscillator --no-demux6 --repeats 15 --baseline /tmp/base
 
 The oscillator (``.tran 10ms 50s``), the flow amplifier (30 s) and the 3-bit
 demultiplexer (16 s) from ``netlists/`` run in pneunet and in ngspice on the same
@@ -14,7 +16,12 @@ Printed per circuit (medians of ``--repeats`` runs):
 * in-process transient: pneunet's ``transient`` (netlist parsed outside the timer,
   imports warmed up) against ngspice's "Total analysis time" (target ≤ 0.5×);
 * whole process: ``python -m pneunet run FILE.pn`` (CSV written) against
-  ``ngspice -b deck.cir`` (data written), target ≤ 4×;
+  ``ngspice -b deck.cir`` (data written), target ≤ 4× (issue 35: ≤ 2.5×); the child
+  processes keep their bytecode in a temporary ``PYTHONPYCACHEPREFIX`` as an installed
+  package does (``--no-bytecode-cache``: compiled per process, as under
+  ``PYTHONDONTWRITEBYTECODE=1``); with ``--baseline TREE`` an earlier source tree's whole
+  process (wall and CPU time) alternating with this one's, and for the oscillator both
+  trees' import time (``-X importtime``) and module count;
 * accuracy against pneunet at rtol = atol = 1e-9: the oscillator's period, the
   others' largest relative pressure deviation on the output grid;
 * for the oscillator, steps and residual calls per simulated second.
@@ -99,9 +106,55 @@ def netlist_with_tran(netlist, t_step, t_stop, folder):
     return path
 
 
-def pneunet_process(path, repeats, folder):
-    cmd = [sys.executable, "-m", "pneunet", "run", path, "-q", "-o", folder]
-    return median_time(lambda: subprocess.run(cmd, check=True, cwd=REPO), repeats)
+def pneunet_process(path, repeats, folder, baseline=None):
+    """Median wall times (s) of ``python -m pneunet run`` in this tree and, alternating
+    with it, in the ``baseline`` tree (None without one); and {tree: median CPU s}."""
+    trees = [REPO] + ([baseline] if baseline else [])
+    times, cpu = {tree: [] for tree in trees}, {tree: [] for tree in trees}
+    for tree in trees:  # warm-up: the bytecode cache, the parser tables' cache
+        cmd, env = _run_command(path, folder, tree)
+        subprocess.run(cmd, check=True, cwd=tree, env=env)
+    for _ in range(repeats):
+        for tree in trees:
+            cmd, env = _run_command(path, folder, tree)
+            t0 = time.perf_counter()
+            proc = subprocess.Popen(cmd, cwd=tree, env=env)
+            _, status, usage = os.wait4(proc.pid, 0)
+            times[tree].append(time.perf_counter() - t0)
+            cpu[tree].append(usage.ru_utime + usage.ru_stime)
+            if status:
+                raise RuntimeError(f"{cmd} failed in {tree}")
+    return [float(np.median(times[tree])) for tree in trees] + [None] * (2 - len(trees)) + \
+        [{tree: float(np.median(c)) for tree, c in cpu.items()}]
+
+
+def import_ms(path, folder, trees, repeats):
+    """{tree: (median time (ms) of the imports of ``pneunet run``, modules imported)}:
+    ``python -X importtime``, the top-level modules' cumulative times, trees alternating."""
+    totals, counts = {tree: [] for tree in trees}, {tree: [] for tree in trees}
+    for _ in range(repeats):
+        for tree in trees:
+            cmd, env = _run_command(path, folder, tree)
+            err = subprocess.run([cmd[0], "-X", "importtime"] + cmd[1:], check=True,
+                                 cwd=tree, env=env, capture_output=True, text=True).stderr
+            totals[tree].append(sum(int(m) for m in re.findall(
+                r"^import time:\s+\d+ \|\s+(\d+) \| \S", err, flags=re.M)) / 1e3)
+            counts[tree].append(len(re.findall(r"^import time:\s+\d+ \|", err, flags=re.M)))
+    return {tree: (float(np.median(totals[tree])), int(np.median(counts[tree])))
+            for tree in trees}
+
+
+#: where the child processes keep their compiled bytecode (None: they compile every module
+#: each run, as under PYTHONDONTWRITEBYTECODE=1); set by main
+PYCACHE = None
+
+
+def _run_command(path, folder, tree):
+    env = dict(os.environ, PYTHONPATH=tree)
+    if PYCACHE:  # as an installed package runs: every module compiled once, not per process
+        env.pop("PYTHONDONTWRITEBYTECODE", None)
+        env["PYTHONPYCACHEPREFIX"] = os.path.join(PYCACHE, os.path.basename(tree) or "tree")
+    return [sys.executable, "-m", "pneunet", "run", path, "-q", "-o", folder], env
 
 
 def peak_memory_mb(cmd) -> tuple[float, float]:
@@ -167,21 +220,38 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--no-demux6", action="store_true")
+    ap.add_argument("--only", metavar="CIRCUIT", choices=[c[0] for c in CASES], default=None,
+                    help="one of the three small circuits only")
     ap.add_argument("--no-ngspice", action="store_true")
     ap.add_argument("--no-reference", action="store_true",
                     help="demux6 without its rtol 1e-8 reference (22 s)")
+    ap.add_argument("--baseline", metavar="TREE", default=None,
+                    help="an earlier source tree (git archive COMMIT | tar -x -C TREE): its "
+                         "whole process and imports are timed alternately with this tree's")
+    ap.add_argument("--no-bytecode-cache", action="store_true",
+                    help="child processes compile every module each run (as this machine's "
+                         "PYTHONDONTWRITEBYTECODE=1 makes them); default: compiled once, into "
+                         "a temporary PYTHONPYCACHEPREFIX, as an installed package is")
     args = ap.parse_args(argv)
+    global PYCACHE
+    PYCACHE = None if args.no_bytecode_cache else tempfile.mkdtemp(prefix="bench_small_pyc_")
     have_spice = shutil.which("ngspice") is not None and not args.no_ngspice
     if not have_spice and not args.no_ngspice:
         print("note: ngspice not found (apt-get install -y ngspice): ngspice columns skipped")
+    print(f"bytecode: {'compiled per process' if args.no_bytecode_cache else 'cached'}; "
+          f"load average {', '.join(f'{x:.2f}' for x in os.getloadavg())}")
     print(f"{os.cpu_count()} cores (shared); medians of {args.repeats}; ngspice reltol "
           f"{SPICE_RELTOL:g}, dead capacitance {DEAD_CAPACITANCE:g} mg/kPa at algebraic nodes")
     rows = []
     for name, netlist, t_step, t_stop, nodes in CASES:
+        if args.only and name != args.only:
+            continue
         with tempfile.TemporaryDirectory() as tmp:
             pn = pneunet_in_process(netlist, t_step, t_stop, nodes, args.repeats)
-            pn_proc = pneunet_process(netlist_with_tran(netlist, t_step, t_stop, tmp),
-                                      args.repeats, tmp)
+            copy = netlist_with_tran(netlist, t_step, t_stop, tmp)
+            pn_proc, base_proc, cpu = pneunet_process(copy, args.repeats, tmp, args.baseline)
+            if name == "oscillator":
+                imports = import_ms(copy, tmp, list(cpu), args.repeats)
             sp = ngspice_runs(netlist, t_step, t_stop, nodes, args.repeats, tmp) \
                 if have_spice else None
         t_ref, p_ref = pneunet_reference(netlist, t_step, t_stop, nodes)
@@ -194,7 +264,16 @@ def main(argv=None):
               f"{s['residual_calls']}, Jacobians {s['jacobian_calls']}, jumps "
               f"{s['branch_jumps']}" + (f"; ngspice analysis {sp['analysis']:.3f} s, whole "
                                          f"{sp['wall']:.2f} s" if sp else ""))
+        if base_proc:
+            print(f"  baseline {args.baseline}: whole {base_proc:.2f} s; this tree / baseline "
+                  f"{pn_proc / base_proc:.3f} (CPU {cpu[REPO]:.3f} / {cpu[args.baseline]:.3f} s"
+                  f" = {cpu[REPO] / cpu[args.baseline]:.3f})"
+                  + (f"; ngspice whole {base_proc / sp['wall']:.2f}× (this tree "
+                     f"{pn_proc / sp['wall']:.2f}×)" if sp else ""))
         if name == "oscillator":
+            for tree, (ms, count) in imports.items():
+                print(f"  imports of pneunet run ({'this tree' if tree == REPO else tree}): "
+                      f"{ms:.0f} ms (-X importtime, median), {count} modules")
             print(f"  per simulated second: {s['steps'] / t_stop:.1f} steps, "
                   f"{s['residual_calls'] / t_stop:.1f} residual calls, "
                   f"{s['jacobian_calls'] / t_stop:.1f} Jacobians")
@@ -215,6 +294,9 @@ def main(argv=None):
 
     if not args.no_demux6:
         demux6(args)
+    print(f"load average at the end {', '.join(f'{x:.2f}' for x in os.getloadavg())}")
+    if PYCACHE:
+        shutil.rmtree(PYCACHE, ignore_errors=True)
 
 
 DEMUX6_NODES = [f"act[{k}]" for k in range(64)]
