@@ -102,6 +102,9 @@ def test_jacobian_is_the_hand_written_residuals_derivative(t, cj):
     np.testing.assert_allclose(dae.dense(data), numeric, rtol=1e-6, atol=1e-9)
     np.testing.assert_allclose(dae.jacobian(t, y, ydot, cj).toarray(), numeric, rtol=1e-6,
                                atol=1e-9)
+    if cj == 0.0:  # the default: ∂F/∂y alone
+        np.testing.assert_allclose(dae.jacobian(t, y, ydot).toarray(), numeric, rtol=1e-6,
+                                   atol=1e-9)
     out = np.full((dae.n, dae.n), 9.0)
     assert dae.dense(data, out) is out and np.array_equal(out, dae.dense(data))
     b, c = dae.node_index("b"), dae.node_index("c")
@@ -175,7 +178,7 @@ def test_algebraic_block_is_the_algebraic_rows_of_the_full_system():
     h = 1e-5
     slopes = [(_q(p["b"] + h, o, r) - _q(p["b"] - h, o, r)) / (2 * h)
               for o, r in ((p["a"], R2), (AMB, R3))]
-    for limit in (40, 0):
+    for limit in (40, 1, 0):
         block = AlgebraicBlock(dae, dense_limit=limit)
         res, jac, scale = block.evaluate(2.0, y)
         assert isinstance(jac, np.ndarray) == (limit > 0)  # dense up to the limit, else CSC
@@ -200,6 +203,33 @@ def test_algebraic_block_with_one_fixed_node_and_other_families_first():
     res, jac, _ = AlgebraicBlock(dae).evaluate(0.0, _vector(dae, p))
     assert res == pytest.approx([_q(170.0, 260.0, R2) + _q(170.0, AMB, R3)], rel=1e-12)
     assert jac.shape == (1, 1)
+
+
+def test_a_row_without_any_slope_is_scaled_by_the_floor():
+    """b between two valves held closed: every partial of its equation is zero; its scale
+    is the 1e-300 floor, never 0 (the fold indicator divides by it)."""
+    from pneunet.valve_params import PAPER_VALVES
+
+    c = Circuit("closed", ambient=AMB)
+    c.pressure_source("P1", "s", 200.0)
+    c.pressure_source("PC", "k", 600.0)
+    c.valve("X1", "s", "b", "k", PAPER_VALVES["axi"])
+    c.valve("X2", "b", "atm", "k", PAPER_VALVES["axi"])
+    res, jac, scale = AlgebraicBlock(CircuitDAE(c)).evaluate(0.0, np.array([150.0]))
+    assert res.tolist() == [0.0] and jac.tolist() == [[0.0]] and scale.tolist() == [1e-300]
+
+
+def test_the_pattern_of_a_chain_is_tridiagonal():
+    c = Circuit("chain", ambient=AMB)
+    c.pressure_source("P1", "n0", 300.0)
+    for k in range(5):
+        c.resistor(f"R{k}", f"n{k}", f"n{k + 1}", R=1.0)
+        c.volume(f"V{k}", f"n{k + 1}", V=1.0)
+    c.resistor("R9", "n5", "atm", R=1.0)
+    dae = CircuitDAE(c)
+    order = [dae.node_index(f"n{k}") for k in range(1, 6)]
+    pattern = dae.sparsity().toarray()[np.ix_(order, order)]
+    np.testing.assert_array_equal(pattern, np.eye(5) + np.eye(5, k=1) + np.eye(5, k=-1))
 
 
 def test_an_algebraic_block_without_algebraic_nodes_is_empty():
@@ -230,14 +260,18 @@ def test_breakpoints_equal_up_to_rounding_are_one():
 
 
 def test_each_source_delivers_the_flow_of_its_own_node():
-    """At zero rates of change: a volume on a source node stores nothing here (and its p0
-    does not set the source's pressure); a family with no port at a source (the volume at m,
-    added first) is passed over, not the end of the sum."""
+    """At zero rates of change: volumes on the source nodes store nothing here (and their p0
+    and an .ic there do not set a source's pressure); a family with no port at a source (the
+    flow source at m, added before the resistors) is passed over, not the end of the sum."""
     c = Circuit("two sources", ambient=AMB, flow_band=BAND)
     c.pressure_source("PA", "s1", 300.0)
     c.pressure_source("PB", "s2", Step(150.0, 250.0, at=1.0))
     c.volume("Vm", "m", V=V1, p0=170.0)
-    c.volume("Vs", "s2", V=V2, p0=400.0)
+    c.volume("Vs1", "s1", V=V2, p0=400.0)
+    c.volume("Vs2", "s2", V=V2, p0=400.0)
+    c.flow_source("Fm", "m", "atm", 10.0)
+    c.set_initial("s1", 410.0)
+    c.set_initial("s2", 420.0)
     c.resistor("R1", "s1", "m", R=R1)
     c.resistor("R2", "s2", "m", R=R2)
     c.resistor("R3", "m", "atm", R=R3)
@@ -248,7 +282,8 @@ def test_each_source_delivers_the_flow_of_its_own_node():
     m = np.array([180.0, 220.0])
     np.testing.assert_allclose(flows["PA"], _q(300.0, m, R1), rtol=1e-12)
     np.testing.assert_allclose(flows["PB"], _q(np.array([150.0, 250.0]), m, R2), rtol=1e-12)
-    assert dae.node_names == ["m"] and dae.initial_state(0.0).tolist() == [170.0]
+    assert dae.node_names == ["m"] and dae.fixed_names[:2] == ["s1", "s2"]
+    assert dae.initial_state(0.0).tolist() == [170.0]
 
 
 def test_consistent_rates_solve_a_coupled_mass_matrix():
