@@ -132,6 +132,7 @@ def test_yield_se_stops_once_the_interval_is_as_narrow_as_asked():
     assert (high - low) / 2 <= z * se
     assert 0 < early.passed < early.n < n_max and early.simulations == early.n
     assert (early.se_target, early.n_max) == (se, n_max)
+    assert (early.to_json()["se_target"], early.to_json()["n_max"]) == (se, n_max)
     assert f"stopped at {early.n} of at most {n_max}" in early.report()
     full = yield_analysis(problem, {}, spread, n=n_max, seed=1, nominal={})
     assert full.simulations == n_max - early.n  # the early samples came from the cache
@@ -147,6 +148,20 @@ def test_yield_se_stops_once_the_interval_is_as_narrow_as_asked():
     short = yield_analysis(problem, {}, spread, n=16, seed=1, nominal={}, se=se)
     assert (short.n, short.simulations) == (16, 0)  # the same first 16 samples, cached
     assert "all 16 samples drawn: the Wilson half-width" in short.report()
+
+
+def test_yield_se_on_the_command_line(tmp_path, capsys):
+    """--yield-se reaches the yield: its JSON says what was asked and where it stopped."""
+    netlist = tmp_path / "rc.pn"
+    netlist.write_text(".param R=1\nPS supply 200kPa\nR1 supply tank {R}kPa*s/mg\n"
+                       "V1 tank 1000mL\n.tran 10ms 0.2s\n")
+    assert main(["design", str(netlist), "--target", "p_max@tank>=100kPa", "--yield", "20",
+                 "--yield-se", "0.3", "--tolerance", "R=±50%", "--workers", "1",
+                 "--json"]) in (0, 1)
+    out = json.loads(capsys.readouterr().out)["yield"]
+    assert (out["se_target"], out["n_max"], out["n"]) == (0.3, 20, 20)
+    low, high = out["interval95"]
+    assert (high - low) / 2 <= 1.959963984540054 * 0.3
 
 
 def test_yield_se_without_yield_is_exit_2(short_oscillator, capsys):
