@@ -22,6 +22,8 @@ import numpy as np
 
 #: samples on each side of a recorded crossing used for its straight-line estimate
 LINE_HALF_WIDTH = 2
+#: Gauss–Newton steps refining each cycle's shift on the whole cycle
+REFINE_STEPS = 2
 
 
 def crossings(t, y, level) -> np.ndarray:
@@ -67,6 +69,7 @@ class Alignment:
     level: float
     starts: np.ndarray
     margin: float  # s simulated past the record so a slower model still has its cycle
+    record: tuple = ()  # (times, values) of the recorded signal: each cycle's shift refined
 
     @classmethod
     def of(cls, t, y, signal: str) -> "Alignment | None":
@@ -82,11 +85,13 @@ class Alignment:
         starts = recorded_crossings(t, y, level)
         if len(starts) < 3:
             return None
-        return cls(signal, level, starts, 0.5 * float(np.median(np.diff(starts))))
+        return cls(signal, level, starts, 0.5 * float(np.median(np.diff(starts))),
+                   (np.asarray(t, float), y))
 
     def window(self, t0: float, t1: float) -> "Alignment":
         """The same alignment restricted to cycle starts up to ``t1``."""
-        return Alignment(self.signal, self.level, self.starts[self.starts <= t1], self.margin)
+        return Alignment(self.signal, self.level, self.starts[self.starts <= t1], self.margin,
+                         self.record)
 
     def model_times(self, times, sim_t, sim_y, first_time: float = 0.0,
                     settled: bool = False) -> np.ndarray:
@@ -118,4 +123,33 @@ class Alignment:
         before = sim_starts[0] - self.starts[0] if settled else first_time
         shift = np.where(k >= 0, sim_starts[np.maximum(k, 0)] - self.starts[np.maximum(k, 0)],
                          before)
-        return times + shift
+        return times + self._refined(shift, k if settled else np.where(k >= 0, k, -2),
+                                     times, sim_t, sim_y)
+
+    def _refined(self, shift, k, times, sim_t, sim_y):
+        """Each cycle's shift moved by Gauss–Newton steps to the one that matches the whole
+        recorded cycle best (least squares over its samples): a crossing time read from a
+        few noisy samples is off by milliseconds, and that error times the steep slope
+        after a corner would stand in the residual of the whole cycle."""
+        from .model import sample_at
+
+        if not self.record:
+            return shift
+        rec_t, rec_y = self.record
+        measured = np.interp(times, rec_t, rec_y)
+        dt = float(np.median(np.diff(times))) if len(times) > 1 else 0.0
+        h = 1e-3 * dt
+        out = shift.copy()
+        for cycle in np.unique(k[k >= -1]):  # -2: compared at its own times
+            idx = k == cycle
+            s = float(shift[idx][0])
+            for _ in range(REFINE_STEPS):
+                at = times[idx] + s
+                r = sample_at(sim_t, sim_y, at) - measured[idx]
+                slope = (sample_at(sim_t, sim_y, at + h) - sample_at(sim_t, sim_y, at - h)) / (2 * h)
+                denom = float(slope @ slope)
+                if not denom > 0:
+                    break
+                s += float(np.clip(-(r @ slope) / denom, -dt, dt))
+            out[idx] = s
+        return out

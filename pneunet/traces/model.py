@@ -29,6 +29,7 @@ from ..errors import PneunetError, SolverError
 #: rough
 FIT_OPTIONS = {"rtol": 1e-6, "atol": 1e-6}
 DIFF_STEP = 5e-3
+OUTPUT_PER_SAMPLE = 5
 
 
 class TraceModel:
@@ -121,7 +122,7 @@ class TraceModel:
         each recorded cycle is compared with the simulated cycle of the same number (in
         a settled start: the first after the settling time), started at its own crossing
         (the simulation runs ``align.margin`` past the record, twice that settled)."""
-        dt = float(np.median(np.diff(times))) if len(times) > 1 else None
+        dt = float(np.median(np.diff(times))) / OUTPUT_PER_SAMPLE if len(times) > 1 else None
         settled = self.state is not None and self.state.mode == "settled"
         t_end = float(times[-1]) + (align.margin * (2 if settled else 1)
                                     if align is not None else 0.0)
