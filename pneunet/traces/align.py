@@ -11,8 +11,9 @@ the simulated cycle k started at the simulation's own k-th crossing s_k:
 (before the first crossing, y_sim(t): the start-up from the known initial state).  A
 period error then shows once per cycle, at its end, where it belongs; a few
 milliseconds of timing at a jump of an algebraic node no longer add up.  The recorded
-crossings are taken from a straight line through the samples around each one, so their
-noise stays far below a sample interval.
+crossings are taken from a straight line through the samples around each one; each
+cycle's shift is then refined on the whole cycle (least squares over its samples), so
+the crossing's own noise does not stand in the cycle's residual.
 """
 from __future__ import annotations
 
