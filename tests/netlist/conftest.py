@@ -1,6 +1,7 @@
 """``opened_files``: the data files a call opens, watched through Python's "open" audit
 event (open, io.open, os.open, Path.open/read_*); imports, entry-point scans and files of
-the installed program and libraries (grammar.lark, pint's unit definitions) are left out.
+the installed program and libraries (grammar.lark, pint's unit definitions, the parser
+tables lark keeps in the user's cache) are left out.
 An audit hook cannot be removed, so one hook records only while a call is watched."""
 import os
 import sys
@@ -8,10 +9,13 @@ import sys
 import pytest
 
 import pneunet
+from pneunet.netlist.syntax import grammar_cache
 
 #: the program's and the libraries' own files
 CODE = tuple(os.path.realpath(p) + os.sep for p in
              {sys.prefix, sys.base_prefix, os.path.dirname(pneunet.__file__)})
+#: the parser tables lark keeps for pneunet, read at a process's first parse
+OWN = {os.path.realpath(p) for p in [grammar_cache()] if p}
 
 _OPENED: list = []
 _WATCHING: list = []
@@ -43,7 +47,7 @@ def watch(fn):
         error = exc
     finally:
         _WATCHING.clear()
-    return [p for p in _OPENED if not p.startswith(CODE)], error
+    return [p for p in _OPENED if not p.startswith(CODE) and p not in OWN], error
 
 
 @pytest.fixture
