@@ -80,7 +80,10 @@ class IncludePolicy:
                                     "folder with --include-path or PNEUNET_PATH")
         refused = None
         for folder in (base, *self.roots[1:]):
-            path = Path(os.path.realpath(folder / name))
+            try:  # realpath raises when a link on the way vanishes as it is read
+                path = Path(os.path.realpath(folder / name))
+            except OSError:
+                continue
             if not self.allows(path):
                 refused = refused or path
                 continue
@@ -140,6 +143,18 @@ class Opened:
         self.close()
 
 
+def _here(src: SourceText, item) -> Path | None:
+    """The including file, symbolic links resolved (None for netlist text); an error at
+    ``item`` if a folder on the way was swapped while it was read."""
+    if src.name == "<netlist>":
+        return None
+    try:
+        return Path(os.path.realpath(src.name))
+    except OSError:
+        raise NetlistError(f"{_short(src.name)!r} changed while it was read", span=item.span,
+                           hint="a folder on the way was replaced while pneunet ran") from None
+
+
 def _short(text: str, width: int = 80) -> str:
     return text if len(text) <= width else text[:width - 1] + "…"
 
@@ -163,12 +178,10 @@ def expand(src: SourceText, policy: IncludePolicy, limits: Limits = DEFAULT,
             raise NetlistError(f"includes nested {len(chain) + 1} deep "
                                f"({limits.exceeded('max_include_depth')})", span=item.span,
                                hint=limits.hint("max_include_depth"))
-        base = Path(os.path.realpath(src.name)).parent if src.name != "<netlist>" \
-            else policy.roots[0]
-        opened = policy.open(item, base)
+        here = _here(src, item)
+        opened = policy.open(item, here.parent if here else policy.roots[0])
         target = opened.path
-        files = [Path(os.path.realpath(src.name))] if src.name != "<netlist>" else []
-        files += [path for path, _ in chain]
+        files = ([here] if here else []) + [path for path, _ in chain]
         with opened:
             if target in files:
                 loop = " -> ".join(p.name for p in [*reversed(files), target])

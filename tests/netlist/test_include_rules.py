@@ -4,6 +4,7 @@ the hints, and what is opened (never followed through a link, checked by its des
 closed once).  Each test kills mutants of pneunet/netlist/includes.py that survived
 tests/netlist/test_includes.py (benchmarks/mutation.py, issue 39)."""
 import os
+import sys
 import threading
 from pathlib import Path
 from types import SimpleNamespace
@@ -222,3 +223,30 @@ def test_included_files_are_closed_once(home):
         os.fstat(other)
     finally:
         os.close(other)
+
+
+def test_a_link_vanishing_while_a_name_is_resolved_is_an_error_not_a_traceback(home,
+                                                                              monkeypatch):
+    """realpath raises FileNotFoundError when a link on the way is removed between its
+    lstat and its readlink (a folder swapped back, as in test_includes' swap loop): each
+    candidate is passed over (none left: not found); the including file's own place: a
+    located error."""
+    real = os.path.realpath
+    (home / "v.pn").write_text("R9 a atm 1\n")
+    (home.parent / "shared" / "v.pn").write_text("R_SHARED a atm 1\n")
+
+    def vanishing(path, *args, **kw):
+        if sys._getframe(1).f_code.co_name == vanishing.caller:
+            raise FileNotFoundError(2, "No such file or directory", str(path))
+        return real(path, *args, **kw)
+
+    monkeypatch.setattr(includes.os.path, "realpath", vanishing)
+    vanishing.caller = "resolve"  # each candidate: the netlist's folder, then shared/
+    (home / "top.pn").write_text('R1 a atm 1\n.include "v.pn"\n')
+    err = _error(home / "top.pn", 'R1 a atm 1\n.include "v.pn"\n',
+                 include_path=[home.parent / "shared"])
+    assert err.message == "cannot find included file 'v.pn'" and err.span.line == 2
+    vanishing.caller = "_here"  # the including file itself
+    err = _error(home / "top.pn", 'R1 a atm 1\n.include "v.pn"\n')
+    assert err.message.endswith("' changed while it was read") and err.span.line == 2
+    assert err.span.file.endswith("top.pn")
