@@ -228,23 +228,24 @@ def test_included_files_are_closed_once(home):
 def test_a_link_vanishing_while_a_name_is_resolved_is_an_error_not_a_traceback(home,
                                                                               monkeypatch):
     """realpath raises FileNotFoundError when a link on the way is removed between its
-    lstat and its readlink (a folder swapped back, as in test_includes' swap loop): each
-    candidate is passed over (none left: not found); the including file's own place: a
-    located error."""
+    lstat and its readlink (a folder swapped back, as in test_includes' swap loop): the
+    candidate is passed over for the search path's (none left: not found); the including
+    file's own place: a located error."""
     real = os.path.realpath
     (home / "v.pn").write_text("R9 a atm 1\n")
     (home.parent / "shared" / "v.pn").write_text("R_SHARED a atm 1\n")
 
     def vanishing(path, *args, **kw):
-        if sys._getframe(1).f_code.co_name == vanishing.caller:
+        if sys._getframe(1).f_code.co_name == vanishing.caller and "shared" not in str(path):
             raise FileNotFoundError(2, "No such file or directory", str(path))
         return real(path, *args, **kw)
 
     monkeypatch.setattr(includes.os.path, "realpath", vanishing)
-    vanishing.caller = "resolve"  # each candidate: the netlist's folder, then shared/
+    vanishing.caller = "resolve"  # the candidate in the netlist's folder, not shared/'s
     (home / "top.pn").write_text('R1 a atm 1\n.include "v.pn"\n')
-    err = _error(home / "top.pn", 'R1 a atm 1\n.include "v.pn"\n',
-                 include_path=[home.parent / "shared"])
+    deck = parse_file(home / "top.pn", include_path=[home.parent / "shared"])
+    assert "R_SHARED" in deck.circuit.elements and "R9" not in deck.circuit.elements
+    err = _error(home / "top.pn", 'R1 a atm 1\n.include "v.pn"\n')
     assert err.message == "cannot find included file 'v.pn'" and err.span.line == 2
     vanishing.caller = "_here"  # the including file itself
     err = _error(home / "top.pn", 'R1 a atm 1\n.include "v.pn"\n')

@@ -85,6 +85,7 @@ def test_error_in_an_included_file_names_file_line_and_chain(project):
         parse_file(project / "top.pn")
     err = info.value
     assert (Path(err.span.file).name, err.span.line, err.span.column) == ("b.pn", 2, 10)
+    assert err.span.via == (f"{project / 'lib' / 'a.pn'}:1", f"{project / 'top.pn'}:2")
     report = err.report()
     assert f"included from {project / 'lib' / 'a.pn'}:1" in report
     assert f"included from {project / 'top.pn'}:2" in report
