@@ -95,7 +95,7 @@ class Alignment:
                          self.record)
 
     def model_times(self, times, sim_t, sim_y, first_time: float = 0.0,
-                    settled: bool = False) -> np.ndarray:
+                    settled: bool = False, anchored: bool = True) -> np.ndarray:
         """Simulation times compared with the recorded ``times`` (see the module doc);
         ``first_time``: the netlist time of the record's first sample.
 
@@ -105,7 +105,9 @@ class Alignment:
         at their own times; ``settled`` (the simulation settled before the record, in an
         arbitrary phase): recorded cycle k with the k-th simulated cycle that starts after
         ``first_time`` + the first recorded crossing, the part before that crossing
-        with the one before it."""
+        with the one before it.  ``anchored``: the start state is exact (the netlist's rest
+        at switch-on), so the part before the first crossing keeps its own times; else
+        (a state read from noisy first samples) its shift is refined as a cycle's."""
         from .model import sample_at
 
         times = np.asarray(times, float)
@@ -124,7 +126,8 @@ class Alignment:
         before = sim_starts[0] - self.starts[0] if settled else first_time
         shift = np.where(k >= 0, sim_starts[np.maximum(k, 0)] - self.starts[np.maximum(k, 0)],
                          before)
-        return times + self._refined(shift, k if settled else np.where(k >= 0, k, -2),
+        kept = settled or not anchored
+        return times + self._refined(shift, k if kept else np.where(k >= 0, k, -2),
                                      times, sim_t, sim_y)
 
     def _refined(self, shift, k, times, sim_t, sim_y):

@@ -29,6 +29,8 @@ from ..errors import PneunetError, SolverError
 #: rough
 FIT_OPTIONS = {"rtol": 1e-6, "atol": 1e-6}
 DIFF_STEP = 5e-3
+#: simulation output points per sample interval where cycles are compared at shifted
+#: times (a shifted cycle interpolated between sample-spaced points misplaces corners)
 OUTPUT_PER_SAMPLE = 5
 
 
@@ -115,14 +117,17 @@ class TraceModel:
         return sol
 
     def sample(self, values: dict, times, signals, align=None):
-        """({signal: samples at ``times``}, solution); output on the sample spacing.
+        """({signal: samples at ``times``}, solution); output on the sample spacing (a
+        fifth of it with ``align``).
 
         ``times`` count from the record's first sample (netlist time
         :attr:`first_time`).  With ``align`` (:class:`~pneunet.traces.align.Alignment`)
         each recorded cycle is compared with the simulated cycle of the same number (in
         a settled start: the first after the settling time), started at its own crossing
         (the simulation runs ``align.margin`` past the record, twice that settled)."""
-        dt = float(np.median(np.diff(times))) / OUTPUT_PER_SAMPLE if len(times) > 1 else None
+        dt = float(np.median(np.diff(times))) if len(times) > 1 else None
+        if dt is not None and align is not None:  # compared at shifted times: finer output
+            dt /= OUTPUT_PER_SAMPLE
         settled = self.state is not None and self.state.mode == "settled"
         t_end = float(times[-1]) + (align.margin * (2 if settled else 1)
                                     if align is not None else 0.0)
@@ -130,7 +135,9 @@ class TraceModel:
         if align is None:
             at = times + self.first_time
         else:
-            at = align.model_times(times, sol.t, sol[align.signal], self.first_time, settled)
+            anchored = self.state is None or self.state.mode == "rest"
+            at = align.model_times(times, sol.t, sol[align.signal], self.first_time, settled,
+                                   anchored)
         return {s: sample_at(sol.t, sol[s], at) for s in signals}, sol
 
 
