@@ -162,10 +162,10 @@ def element_states(circuit, t0: float, recorded: dict | None = None) -> dict:
     from ..engine.single_rate import pseudo_capacitance, residual_and_jacobian
     from ..engine.solvers.newton import newton
 
+    if not any(_family(spec.kind).state_ports for spec in circuit.elements.values()):
+        return {}
     dae = CircuitDAE(circuit)
     states = [dae.node_names.index(n) for n in sorted(dae.state_nodes)]
-    if not states:
-        return {}
     y = dae.initial_state(t0)
     active = np.union1d(states, dae.algebraic_idx)
     result = newton(residual_and_jacobian(dae, t0), y, active,
