@@ -174,8 +174,7 @@ def element_states(circuit, t0: float, recorded: dict | None = None) -> dict:
         y = result.y
     seen = _signals_at(dae, t0, y, recorded or {})
     if seen:
-        owners = {spec.name for spec in circuit.elements.values()
-                  if any(name.endswith("_" + spec.name) for name in seen)}
+        owners = {name.partition("_")[2] for name in seen}  # contraction_M1 → M1
         free = [dae.node_names.index(spec.nodes[p]) for spec in circuit.elements.values()
                 if spec.name in owners
                 for p in _family(spec.kind).state_ports]
