@@ -73,7 +73,8 @@ class MembraneValve(ElementFamily):
         # few analytic valves: each one's (forward, backward) parameters as floats
         self._rows = None
         if self.n <= FEW_INSTANCES and self._analytic.all():
-            both = self._both or (np.array(list(self._fwd.values())),) * 2
+            fwd_rows = np.array(list(self._fwd.values()))
+            both = self._both or (fwd_rows, fwd_rows)
             self._rows = list(zip(both[0].T.tolist(), both[1].T.tolist()))
 
     def _analytic_flow(self, p, partials=True):
@@ -81,9 +82,7 @@ class MembraneValve(ElementFamily):
             params = self._fwd.values()
         else:  # each valve's parameters for its flow direction: (6, ..., n)
             forward = (p[..., 0] >= p[..., 1])[..., None, :]
-            params = np.where(forward, *self._both)
-            if p.ndim > 2:
-                params = np.moveaxis(params, -2, 0)
+            params = np.moveaxis(np.where(forward, *self._both), -2, 0)  # no-op for (n, 3)
         return valve_flow_and_partials(p[..., 0], p[..., 1], p[..., 2], *params,
                                        band=self.context.options.flow_band, partials=partials)
 
@@ -100,11 +99,10 @@ class MembraneValve(ElementFamily):
             return (np.array([(m, -m, 0.0) for m, _ in laws]),
                     np.array([(g, (-g[0], -g[1], -g[2]), _NO_FLOW) for _, g in laws]), None)
         mdot, (d_in, d_out, d_ctrl) = self._analytic_flow(p)
-        grads = np.empty((self.n, 1, 3))
-        grads[:, 0, 0], grads[:, 0, 1], grads[:, 0, 2] = d_in, d_out, d_ctrl
+        grads = np.stack(np.broadcast_arrays(d_in, d_out, d_ctrl), axis=-1)  # (n, 3)
         for model, idx in self._custom.values():
-            mdot[idx], grads[idx, 0] = _numeric_flow(model, p[idx])
-        return mdot[:, None] * _PORTS, _PORTS[:, None] * grads, None
+            mdot[idx], grads[idx] = _numeric_flow(model, p[idx])
+        return mdot[:, None] * _PORTS, _PORTS[:, None] * grads[:, None, :], None
 
     def _flow(self, p):
         """Flow in→out (mg/s) for pressures p (..., n, 3), without partials."""
@@ -126,10 +124,10 @@ class MembraneValve(ElementFamily):
 
 
 def _param_arrays(params: list[ValveParams | None]) -> dict[str, np.ndarray]:
-    """Columns of valve parameters; placeholders (never used) for custom models."""
-    filler = ValveParams(Rf=1.0, pclose=0.0, ptrans=1.0, e=1.0, ain=0.5, aout=0.5)
-    rows = [p or filler for p in params]
-    return {k: np.array([getattr(r, k) for r in rows]) for k in ValveParams.__dataclass_fields__}
+    """Columns of valve parameters; NaN for a user's model (it has none: its flows are
+    its own, its dp and opening signals undefined)."""
+    return {k: np.array([getattr(r, k) if r else np.nan for r in params])
+            for k in ValveParams.__dataclass_fields__}
 
 
 def _numeric_flow(model, p):

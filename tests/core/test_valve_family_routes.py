@@ -110,6 +110,11 @@ def test_mixed_family_flows_over_a_history_and_its_signals():
                                np.maximum(dp - AXI["pclose"], 0) / (AXI["ptrans"] - AXI["pclose"]),
                                rtol=1e-12)
     np.testing.assert_allclose(sig["mdot"][1], flows[0, :, 0], rtol=1e-13)
+    # a user's model has no a_in, a_out, p_close: its dp and opening are undefined, not
+    # numbers of made-up parameters (they were, of a_in = a_out = 0.5, p_close = 0)
+    user = [i for i, (m, _) in enumerate(MODELS) if m is USER]
+    assert user and np.isnan(sig["dp"][1][user]).all()
+    assert np.isnan(sig["opening"][1][user]).all()
 
 
 def test_a_small_family_with_a_users_model_is_evaluated_per_valve():
