@@ -18,6 +18,7 @@ test run each).  One test run per mutant, one process: the machine's cores are s
 from __future__ import annotations
 
 import argparse
+import ast
 import json
 import subprocess
 import sys
@@ -83,17 +84,59 @@ def mutate(name: str, work: Path, timeout: float) -> dict:
     start = time.perf_counter()
     run(["cosmic-ray", "init", str(cfg), str(session)], work)
     run(["cr-filter-operators", str(session), str(cfg)], work)
+    skip_annotations(session, work)
     run(["cosmic-ray", "baseline", str(cfg)], work)  # the tests pass unmutated
     run(["cosmic-ray", "exec", str(cfg), str(session)], work)
     return {**results(session, work), "minutes": (time.perf_counter() - start) / 60}
 
 
+def annotations(path: Path) -> list[tuple[tuple[int, int], tuple[int, int]]]:
+    """(start, end) (line, column) of each annotation in a module: never evaluated (every
+    core module has ``from __future__ import annotations``), so a mutant there is no
+    change of behaviour and is not counted (mutmut leaves them out too)."""
+    spans = []
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            a = node.args
+            anns = [node.returns] + [x.annotation for x in [*a.posonlyargs, *a.args,
+                                                            *a.kwonlyargs, a.vararg, a.kwarg] if x]
+        else:
+            anns = [node.annotation] if isinstance(node, ast.AnnAssign) else []
+        spans += [((n.lineno, n.col_offset), (n.end_lineno, n.end_col_offset))
+                  for n in anns if n is not None]
+    return spans
+
+
+def in_annotation(mutation: dict, spans) -> bool:
+    start, end = tuple(mutation["start_pos"]), tuple(mutation["end_pos"])
+    return any(a <= start and end <= b for a, b in spans)
+
+
+def skip_annotations(session: Path, work: Path):
+    """Mark the mutants inside annotations skipped before they run."""
+    from cosmic_ray.work_db import WorkDB, use_db
+    from cosmic_ray.work_item import WorkerOutcome, WorkResult
+    with use_db(str(session), WorkDB.Mode.open) as db:
+        for item in list(db.pending_work_items):
+            spans = annotations(work / item.mutations[0].module_path)
+            if all(in_annotation({"start_pos": m.start_pos, "end_pos": m.end_pos}, spans)
+                   for m in item.mutations):
+                db.set_result(item.job_id, WorkResult(output="In an annotation",
+                                                      worker_outcome=WorkerOutcome.SKIPPED))
+
+
 def results(session: Path, work: Path) -> dict:
-    """Mutants run, killed, skipped and the survivors (path, line, operator, occurrence)."""
+    """Mutants run, killed, skipped and the survivors (path, line, operator, occurrence);
+    mutants inside annotations count as skipped (also in sessions run before they were)."""
     dump = run(["cosmic-ray", "dump", str(session)], work, capture_output=True).stdout
     jobs = [json.loads(line) for line in dump.splitlines() if line.strip()]
-    done = [(w, r) for w, r in jobs if r is not None and r.get("test_outcome")]
-    skipped = [w for w, r in jobs if r is not None and r.get("worker_outcome") == "skipped"]
+    spans = {}
+    ann = [all(in_annotation(m, spans.setdefault(m["module_path"], annotations(
+        work / m["module_path"]))) for m in w["mutations"]) for w, _ in jobs]
+    done = [(w, r) for (w, r), a in zip(jobs, ann)
+            if r is not None and r.get("test_outcome") and not a]
+    skipped = [w for (w, r), a in zip(jobs, ann)
+               if a or (r is not None and r.get("worker_outcome") == "skipped")]
     survivors = [(m["module_path"], m["start_pos"][0], m["operator_name"], m["occurrence"])
                  for w, r in done for m in w["mutations"] if r["test_outcome"] == "survived"]
     killed = sum(r["test_outcome"] != "survived" for _, r in done)
