@@ -21,6 +21,11 @@ from .. import elements
 from ..elements.base import ElementSpec, FamilyContext
 
 
+def _cat(arrays) -> np.ndarray:
+    """Integer arrays joined end to end (empty for none)."""
+    return np.concatenate([np.empty(0, int), *arrays])
+
+
 @dataclass
 class _FamilyBlock:
     family: elements.ElementFamily
@@ -96,11 +101,11 @@ class CircuitDAE:
             cols.append(c)
             owners.append(len(r))
             free_flat = np.flatnonzero(free.ravel())
-            blocks.append(_FamilyBlock(fam, port_node, np.empty(0, int),
+            blocks.append(_FamilyBlock(fam, port_node, None,  # jac_pos: set below
                                        np.flatnonzero(mask.ravel()), free_flat,
                                        port_node.ravel()[free_flat]))
-        rows = np.concatenate(rows) if rows else np.empty(0, int)
-        cols = np.concatenate(cols) if cols else np.empty(0, int)
+        rows = _cat(rows)
+        cols = _cat(cols)
         # every unknown gets a diagonal entry, so the pattern is structurally regular
         diag = np.arange(self.n)
         keys = np.unique(np.concatenate([cols * self.n + rows, diag * self.n + diag]))
@@ -127,8 +132,8 @@ class CircuitDAE:
             partial_to.append(pair)
             block.flows = slice(sum(map(len, flow_to[:-1])), sum(map(len, flow_to)))
             block.partials = slice(sum(map(len, partial_to[:-1])), sum(map(len, partial_to)))
-        self._flow_to = np.concatenate(flow_to) if flow_to else np.empty(0, int)
-        self._partial_to = np.concatenate(partial_to) if partial_to else np.empty(0, int)
+        self._flow_to = _cat(flow_to)
+        self._partial_to = _cat(partial_to)
         self._flow_buffer = np.zeros(self._flow_to.size)
         self._partial_buffer = np.zeros(self._partial_to.size)
         # families with no port at an unknown node (pressure sources) add nothing
@@ -398,9 +403,9 @@ class AlgebraicBlock:
             pair_to.append((np.broadcast_to(at[:, :, None], pairs.shape)[pairs],
                             np.broadcast_to(at[:, None, :], pairs.shape)[pairs]))
         self._flows, self._partials = np.zeros(n_flows), np.zeros(n_pairs)
-        self._flow_to = np.concatenate(flow_to) if flow_to else np.empty(0, int)
-        rows = np.concatenate([r for r, _ in pair_to]) if pair_to else np.empty(0, int)
-        cols = np.concatenate([c for _, c in pair_to]) if pair_to else np.empty(0, int)
+        self._flow_to = _cat(flow_to)
+        rows = _cat(r for r, _ in pair_to)
+        cols = _cat(c for _, c in pair_to)
         self._rows = rows
         keys, self._pair_to = np.unique(cols * na + rows, return_inverse=True)
         if self.dense:
