@@ -16,7 +16,8 @@ Analyses
     runs a netlist's own analyses and ``.meas`` statements.
 Execution
     a local process pool over all cores by default; ``executor=`` any
-    ``concurrent.futures.Executor`` or a ``dask.distributed.Client`` (same results);
+    ``concurrent.futures.Executor`` or a ``dask.distributed.Client`` (same results; on
+    dask the points go in batches, :mod:`~pneunet.analysis.sweep_dask`);
     ``workers=1`` runs in this process.  A failing point is recorded with its error.
     With ``store=PATH`` every finished point is appended to a JSON-lines file keyed
     by the point, and a rerun computes only the points not yet in it.
@@ -445,18 +446,11 @@ def run_sweep(build: Callable, points: Sequence[dict], analysis: Callable | None
         if executor is None:
             for _, p in todo:
                 finish(evaluate_point(build, analysis, p, keep_traces))
-        elif _is_dask(executor):
-            from distributed import as_completed as dask_completed
+        elif _is_dask(executor):  # points in batches, a few per worker thread
+            from .sweep_dask import run_on_dask
 
-            n_workers = len(executor.scheduler_info().get("workers", {})) or 1
-            futures = [executor.submit(evaluate_point, build, analysis, p, keep_traces, pure=False)
-                       for _, p in todo]
-            try:
-                for fut in dask_completed(futures):
-                    finish(fut.result())
-            except BaseException:
-                executor.cancel(futures)
-                raise
+            n_workers = run_on_dask(executor, evaluate_point, build, analysis,
+                                    [p for _, p in todo], keep_traces, finish)
         else:
             from concurrent.futures import as_completed
 

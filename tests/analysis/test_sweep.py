@@ -50,15 +50,38 @@ def test_failed_points_are_recorded_not_fatal():
 
 
 def test_local_pool_and_dask_give_identical_tables(tmp_path):
+    """A dask cluster's sweep equals the local one point for point; its points go in
+    batches (fewer tasks than points) and every point reaches the store."""
     distributed = pytest.importorskip("distributed")
+    from pneunet.analysis.sweep_dask import batch_sizes
+
     pts = small_grid(3)
     local = S.run_sweep(oscillator, pts, FAST, workers=2, progress=False)
     assert local.workers == 2
+    store = tmp_path / "cluster.jsonl"
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                                   dashboard_address=None) as cluster, \
-            distributed.Client(cluster) as client:
-        remote = S.run_sweep(oscillator, pts, FAST, executor=client, progress=False)
+            distributed.Client(cluster) as client, \
+            distributed.get_task_stream(client) as tasks:
+        remote = S.run_sweep(oscillator, pts, FAST, executor=client, store=store,
+                             progress=False)
     a = local.table.drop(columns="elapsed_s")
     b = remote.table.drop(columns="elapsed_s")
     assert a.equals(b)
     assert set(a["regime"]) == {"oscillation", "equilibrium"}
+    assert remote.workers == 2
+    assert len(tasks.data) == len(batch_sizes(9, 2)) < 9
+    stored = S.read_store(store)
+    assert set(stored) == set(b["key"])
+    assert all(stored[k]["result"]["regime"] == r for k, r in zip(b["key"], b["regime"]))
+
+
+def test_dask_batches_shrink_towards_the_end():
+    from pneunet.analysis.sweep_dask import batch_sizes
+
+    for n, threads in [(144, 2), (9, 2), (1, 4), (1000, 8)]:
+        sizes = batch_sizes(n, threads)
+        assert sum(sizes) == n and sizes == sorted(sizes, reverse=True) and sizes[-1] == 1
+    assert batch_sizes(144, 2)[:3] == [24, 20, 17]  # 144/6, 120/6, 100/6 rounded up
+    assert len(batch_sizes(144, 2)) <= 24  # a few per worker, not 144
+    assert batch_sizes(0, 2) == []
