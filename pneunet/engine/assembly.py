@@ -230,12 +230,12 @@ class CircuitDAE:
         """∂F/∂y + cj·∂F/∂ẏ as a scipy CSC matrix."""
         return self.csc(self.evaluate(t, y, ydot, cj)[1])
 
-    def _mass_data(self, t, y):
-        """F(t, y, ẏ = 0) and the CSC data of ∂F/∂ẏ at (t, y) (mg/s, mg/kPa)."""
-        zeros = np.zeros(self.n)
-        f0, stiff = self.evaluate(t, y, zeros, cj=0.0)
+    def _mass_data(self, t, y, ydot=None):
+        """F(t, y, ẏ) and the CSC data of ∂F/∂ẏ there (ẏ = 0 if not given; mg/s, mg/kPa)."""
+        ydot = np.zeros(self.n) if ydot is None else ydot
+        f, stiff = self.evaluate(t, y, ydot, cj=0.0)
         stiff = stiff.copy()
-        return f0, self.evaluate(t, y, zeros, cj=1.0)[1] - stiff
+        return f, self.evaluate(t, y, ydot, cj=1.0)[1] - stiff
 
     def mass_matrix(self, t, y):
         """∂F/∂ẏ at (t, y) as a CSC matrix, mg/kPa."""
@@ -246,20 +246,32 @@ class CircuitDAE:
         return self._mass_data(t, y)[1][self._diagonal_at]
 
     def derivative(self, t, y) -> np.ndarray:
-        """ẏ consistent with y: M_dd·ẏ_d = −F_d(ẏ=0), ẏ_a = 0 (kPa/s)."""
-        f0, mass = self._mass_data(t, y)
+        """ẏ consistent with y: F_d(t, y, ẏ) = 0, ẏ_a = 0 (kPa/s), by Newton's method on ẏ_d
+        (ẏ ← ẏ − M_dd⁻¹·F_d): one step where F is linear in ẏ, two where it is piecewise
+        linear (a thermal volume: its gas enters at the wall temperature, leaves at its
+        own); stops when F_d is below 1e-9 of its value at ẏ = 0, or after 8 steps."""
         d = np.flatnonzero(self.differential)
         ydot = np.zeros(self.n)
+        f, mass = self._mass_data(t, y)
+        tol = 1e-9 * np.abs(f[d]).max(initial=0.0)
+        for _ in range(8):
+            ydot[d] -= self._solve_mass(mass, f, d)
+            f = self.evaluate(t, y, ydot)[0]
+            if np.abs(f[d]).max(initial=0.0) <= tol:
+                break
+            mass = self._mass_data(t, y, ydot)[1]
+        return ydot
+
+    def _solve_mass(self, mass, f, d) -> np.ndarray:
+        """x with M_dd·x = f_d, M the CSC data ``mass`` of ∂F/∂ẏ (kPa/s)."""
         diagonal = mass[self._diagonal_at]
         mass[self._diagonal_at] = 0.0
         if not mass.any():  # one storage term per node: divide
-            ydot[d] = -f0[d] / diagonal[d]
-        else:
-            from scipy.sparse.linalg import spsolve
+            return f[d] / diagonal[d]
+        from scipy.sparse.linalg import spsolve
 
-            mass[self._diagonal_at] = diagonal
-            ydot[d] = -spsolve(self.csc(mass)[d][:, d].tocsc(), f0[d])
-        return ydot
+        mass[self._diagonal_at] = diagonal
+        return spsolve(self.csc(mass)[d][:, d].tocsc(), f[d])
 
     # -- breakpoints and reporting --------------------------------------------------------
     def jumps(self, t_start, t_stop) -> np.ndarray:

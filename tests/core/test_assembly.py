@@ -303,6 +303,33 @@ def test_consistent_rates_solve_a_coupled_mass_matrix():
     np.testing.assert_allclose(dae.evaluate(0.0, y, ydot)[0], 0.0, atol=1e-9)
 
 
+@pytest.mark.parametrize("p, theta", [(180.0, 120.0), (260.0, 200.0), (140.0, 200.0),
+                                      (260.0, 130.0)])
+def test_consistent_rates_of_a_thermal_volume_whichever_way_its_gas_flows(p, theta):
+    """derivative() against the thermal volume's equations solved by hand (docstring of
+    elements/thermal.py): the resistor's inflow q fixes s = γ·q·T_up/T_w (T_up = T_w
+    entering, T leaving), then ṗ = (s + H)/C and θ̇ from the mass balance.  At ẏ = 0 the
+    branch of s is that of −H; at (180, 120) (gas below p_ref, filling) and (260, 200)
+    (above, emptying) it is not the solution's: one linear solve left −34.7 mg/s."""
+    pref, tau, gamma, scaling, v = 150.0, 0.5, 1.4, 1.0, 30.0
+    c = Circuit("thermal", ambient=AMB, flow_band=BAND, temperature=T_K)
+    c.pressure_source("P1", "a", 250.0)
+    c.resistor("R1", "a", "b", R=R1)
+    c.add("thermal_volume", "VT1", ("b", "bT"), V=v, tau=tau, p0=pref, gamma=gamma,
+          scaling=scaling)
+    dae = CircuitDAE(c)
+    assert dae.node_names == ["b", "bT"]
+    cap, q = _cap(v), _q(250.0, p, R1)
+    heat = cap * (p / theta) ** scaling * (pref - theta) / tau
+    s = gamma * q * (1.0 if q >= 0 else theta / pref)
+    pdot = (s + heat) / cap
+    thetadot = (pdot - q * theta / (cap * pref)) * theta / p
+    y = np.array([p, theta])
+    ydot = dae.derivative(0.0, y)
+    np.testing.assert_allclose(ydot, [pdot, thetadot], rtol=1e-9)
+    np.testing.assert_allclose(dae.evaluate(0.0, y, ydot)[0], 0.0, atol=1e-9)
+
+
 def test_a_circuit_is_validated_unless_told_not_to():
     from pneunet import TopologyError
 
