@@ -13,7 +13,10 @@ between transient and branch classifications.  No store: every point is computed
 this machine (``dask scheduler`` and ``dask worker --nworkers 2 --nthreads 1`` as
 processes of their own, joined by a scheduler file in a temporary folder) and prints its
 parallel efficiency against ``--workers 1`` of the same run: T1 / (2 · T_cluster).  The
-cluster is shut down however the benchmark ends.
+cluster is shut down however the benchmark ends.  Each run also prints the CPU time of
+all its processes (this one, the pool's or the cluster's scheduler, nannies and workers):
+T1's CPU over a run's CPU is the efficiency it would have on two idle cores, less any
+end-of-run imbalance — the figure to read when other jobs share the cores.
 """
 from __future__ import annotations
 
@@ -29,8 +32,10 @@ from pathlib import Path
 
 @contextlib.contextmanager
 def dask_cluster(nworkers: int = 2, timeout: float = 60.0):
-    """A dask client of a scheduler and ``nworkers`` single-thread workers started here
-    as CLI processes; both processes are stopped on exit (error or Ctrl-C included)."""
+    """``(client, cpu)``: a dask client of a scheduler and ``nworkers`` single-thread
+    workers started here as CLI processes, and ``cpu()`` the CPU seconds the cluster's
+    processes have used; both processes are stopped on exit (error or Ctrl-C included)."""
+    import psutil
     from distributed import Client
 
     with tempfile.TemporaryDirectory(prefix="pneunet-cluster-") as tmp:
@@ -55,7 +60,9 @@ def dask_cluster(nworkers: int = 2, timeout: float = 60.0):
                             "--death-timeout", "30"], **common))
             client = Client(scheduler_file=str(sfile), timeout=timeout)
             client.wait_for_workers(nworkers, timeout=timeout)
-            yield client
+            tree = [psutil.Process(p.pid) for p in procs]
+            tree += [c for p in list(tree) for c in p.children(recursive=True)]
+            yield client, lambda: sum(sum(p.cpu_times()[:2]) for p in tree)
         finally:
             if client is not None:
                 with contextlib.suppress(Exception):
@@ -87,28 +94,39 @@ def main():
 
     pts = grid(lin("Rout", 0.2, 3.0, args.n), lin("Rvent", 1.0, 6.0, args.n))
     analysis = RegimeMeasure(t_stop=args.t_stop)
-    times, tables = {}, {}
+    times, tables, cpus = {}, {}, {}
+    run_sweep(oscillator, pts[:1], analysis, workers=1, progress=False)  # imports, caches:
+    # the 1-worker baseline and the pool forked from here start warm, the cluster cold
     runs = list(args.workers) + (["cluster"] if args.cluster else [])
     for run in runs:
         load = os.getloadavg()[0]
-        with (dask_cluster(2) if run == "cluster" else contextlib.nullcontext()) as client:
-            t0 = time.perf_counter()
+        with (dask_cluster(2) if run == "cluster" else
+              contextlib.nullcontext((None, lambda: 0.0))) as (client, cluster_cpu):
+            c0, t0 = _cpu() + cluster_cpu(), time.perf_counter()
             r = run_sweep(oscillator, pts, analysis, workers=None if client else run,
                           executor=client, progress=True)
             times[run] = time.perf_counter() - t0
+            cpus[run] = _cpu() + cluster_cpu() - c0
         tables[run] = r.table.drop(columns="elapsed_s")
         what = "dask cluster (2 workers)" if run == "cluster" else f"{run} worker(s)"
-        print(f"{what}: {times[run]:.1f} s for {len(pts)} points ({r.failed} failed); "
-              f"load {load:.2f} before, {os.getloadavg()[0]:.2f} after")
+        print(f"{what}: {times[run]:.1f} s for {len(pts)} points ({r.failed} failed), CPU "
+              f"{cpus[run]:.1f} s; load {load:.2f} before, {os.getloadavg()[0]:.2f} after")
     if 1 in times:
         for run in runs:
             n = 2 if run == "cluster" else run
             if n > 1:
                 print(f"{run}: speed-up {times[1] / times[run]:.2f}x, parallel efficiency "
-                      f"{times[1] / (n * times[run]):.0%} against 1 worker; identical table: "
+                      f"{times[1] / (n * times[run]):.0%} against 1 worker (CPU: "
+                      f"{cpus[1] / cpus[run]:.0%}); identical table: "
                       f"{tables[1].equals(tables[run])}")
     a = agreement(tables[runs[0]])
     print(f"transient vs branches agree at {a['agree']} of {a['compared']} points")
+
+
+def _cpu() -> float:
+    """CPU seconds of this process and of its children that have ended (a pool's)."""
+    t = os.times()
+    return t.user + t.system + t.children_user + t.children_system
 
 
 if __name__ == "__main__":
