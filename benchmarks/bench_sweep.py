@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import json
 import os
 import subprocess
 import sys
@@ -45,19 +46,19 @@ def dask_cluster(nworkers: int = 2, timeout: float = 60.0):
         dask = [sys.executable, "-m", "dask"]  # the `dask` command of this Python
         procs = [subprocess.Popen(dask + ["scheduler", "--scheduler-file", str(sfile),
                                           "--port", "0", "--host", "127.0.0.1",
-                                          "--no-dashboard"], **common)]
+                                          "--no-dashboard", "--idle-timeout", "120s"],
+                                 **common)]  # idle: this process was killed; workers follow
         client = None
         try:
             deadline = time.monotonic() + timeout
-            while not sfile.exists() or not sfile.stat().st_size:
+            while not _written(sfile):
                 if time.monotonic() > deadline or procs[0].poll() is not None:
                     raise RuntimeError("the dask scheduler did not start: "
                                        + (Path(tmp) / "log.txt").read_text()[-2000:])
                 time.sleep(0.1)
             procs.append(subprocess.Popen(
-                dask + ["worker", "--scheduler-file", str(sfile),
-                            "--nworkers", str(nworkers), "--nthreads", "1", "--no-dashboard",
-                            "--death-timeout", "30"], **common))
+                dask + ["worker", "--scheduler-file", str(sfile), "--nworkers", str(nworkers),
+                        "--nthreads", "1", "--no-dashboard", "--death-timeout", "30"], **common))
             client = Client(scheduler_file=str(sfile), timeout=timeout)
             client.wait_for_workers(nworkers, timeout=timeout)
             tree = [psutil.Process(p.pid) for p in procs]
@@ -121,6 +122,14 @@ def main():
                       f"{tables[1].equals(tables[run])}")
     a = agreement(tables[runs[0]])
     print(f"transient vs branches agree at {a['agree']} of {a['compared']} points")
+
+
+def _written(path: Path) -> bool:
+    """Whether the scheduler has written its whole file (JSON)."""
+    try:
+        return isinstance(json.loads(path.read_text()), dict)
+    except (OSError, ValueError):
+        return False
 
 
 def _cpu() -> float:
