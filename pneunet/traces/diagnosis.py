@@ -24,7 +24,6 @@ import numpy as np
 from ..errors import SolverError
 from ..reprs import Summarized, listed, number
 from ..truth.locate import best_lag, hot_phases, phase_profile
-from ..truth.lsq import evaluate_many
 from ..truth.noise import difference_sigma, segments
 from ..truth.verdict import TOLERANCE, Step, at_floor, decide
 from ..truth.waterfall import Waterfall
@@ -32,7 +31,8 @@ from .data import (compared_samples, read_trace, signal_of_column, signal_unit,
                    split_by_cycles)
 from .effects import candidates_for
 from .fit import TraceFit, fit_trace
-from .model import FIT_OPTIONS, TraceModel, TraceResidual
+from .model import FIT_OPTIONS, TraceModel
+from .screen import SCREEN_KEEP, screen_candidates
 
 
 @dataclass(repr=False)
@@ -178,108 +178,6 @@ def locate(fit: TraceFit, test_window, floor: float, data_frame, node: str) -> l
     return findings
 
 
-class _ScreenTask:
-    """One screening point (picklable, runs in a worker): the effect at one point of its
-    grid, the base parameters re-centred on the recorded cycle, then moved by
-    :data:`SCREEN_STEPS` damped Gauss–Newton step(s) with the base fit's Jacobian J
-    (cycle alignment keeps the residual close to linear in them; each step at most
-    :data:`SCREEN_STEP` in ln value, halved when it does not help).  Its merit is the
-    best fit-window residual reached, projected off J's columns, ‖(I − J·J⁺)·r‖²."""
-
-    def __init__(self, effect, point, names, x_base, jac, bounds, model_args, data):
-        self.effect, self.point, self.names, self.x_base = effect, point, names, x_base
-        self.jac, self.bounds, self.model_args, self.data = jac, bounds, model_args, data
-
-    def __call__(self):
-        eff = self.effect
-        names = self.names + list(eff.params)
-        theta = np.log([self.point[k] for k in eff.params])
-        model = TraceModel(*self.model_args[0], effects=(eff,), budget=SCREEN_BUDGET,
-                           **self.model_args[1])
-        fun = TraceResidual(model, names, *self.data)
-        xb, limit = self._recentred(model, names, theta), SCREEN_STEP
-        if model.failures:  # a point the circuit cannot be simulated at: no more time on it
-            return self._failed(model)
-        r = fun(np.concatenate([xb, theta]))
-        if model.failures:
-            return self._failed(model)
-        for _ in range(SCREEN_STEPS):
-            step = np.linalg.lstsq(self.jac, -r, rcond=None)[0]
-            step *= min(1.0, limit / max(np.max(np.abs(step)), 1e-300))
-            trial = np.clip(xb + step, *self.bounds)
-            r1 = fun(np.concatenate([trial, theta]))
-            if r1 @ r1 < r @ r:
-                xb, r = trial, r1
-            else:
-                limit /= 2
-        left = r - self.jac @ np.linalg.lstsq(self.jac, r, rcond=None)[0]
-        values = dict(zip(self.names, np.exp(xb)))
-        values.update(self.point)
-        return {"x": values, "rss": float(left @ left), "simulations": model.calls}
-
-
-    def _failed(self, model):
-        values = dict(zip(self.names, np.exp(self.x_base)))
-        values.update(self.point)
-        return {"x": values, "rss": math.inf, "simulations": model.calls}
-
-    def _recentred(self, model, names, theta):
-        """The base parameters moved so the simulated cycle's turning points, rise
-        fraction and period match the recording (:func:`~pneunet.traces.start.
-        initial_values`, an oscillator it recognises; else unchanged): an effect that
-        changes the period much is judged after the period is matched."""
-        from ..errors import PneunetError
-        from .start import initial_values
-
-        times, sigs, meas = self.data[0], self.data[1], self.data[2]
-        node = next((s for s in sigs if s.startswith("p_")), None)
-        if node is None:
-            return self.x_base
-        x = np.concatenate([self.x_base, theta])
-        lb = np.concatenate([self.bounds[0], theta])
-        ub = np.concatenate([self.bounds[1], theta])
-        try:
-            x, info = initial_values(model, names, x, lb, ub, times, meas[node], node[2:],
-                                     iterations=1)
-        except PneunetError:
-            return self.x_base
-        return x[:len(self.x_base)] if info.get("method") != "none" else self.x_base
-
-
-#: the screen's third best is fitted fully when its merit (fit-window residual sum of
-#: squares) is within this factor of the best's (rms within 1.5×, the verdict's
-#: tolerance); the best two always are (a control-line tube's screen merit is 1.5× a dead
-#: volume's in rms, and only its full fit reaches the floor)
-SCREEN_KEEP = 2.25
-#: largest change of a base parameter (ln value) in one screening step, and the steps
-SCREEN_STEP = 0.25
-SCREEN_STEPS = 1
-#: a screening point's simulation budget, (× the base fit's typical simulation, at
-#: least s): a point that makes the circuit this much stiffer (a long thin tube with no
-#: volume) is a failed point, as it would be in a fit, not seconds lost
-SCREEN_BUDGET = (5.0, 1.0)
-
-
-def _run_task(task):
-    return task()
-
-
-def _screen(cand, names, x_base, jac, params, model_args, data, pool):
-    """Screen rows, best first: per candidate its best grid point (values with the base
-    parameters re-centred, rss after that)."""
-    bounds = (np.log([params[k][1] for k in names]), np.log([params[k][2] for k in names]))
-    tasks = [_ScreenTask(e, p, names, x_base, jac, bounds, model_args, data)
-             for e in cand for p in e.grid()]
-    outs = evaluate_many(_run_task, tasks, pool)
-    rows = []
-    for e in cand:
-        mine = [o for t, o in zip(tasks, outs) if t.effect is e]
-        best = min(mine, key=lambda o: o["rss"])
-        rows.append(dict(best, effect=e, simulations=sum(o["simulations"] for o in mine)))
-    rows.sort(key=lambda r: r["rss"])
-    return rows
-
-
 def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, signals=None,
                    node: str = "tank", effects=None, train_fraction: float = 0.5,
                    max_nfev: int = 40, screen: int = 3, tolerance: float = TOLERANCE,
@@ -342,10 +240,10 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
             data_fit = _fit_data(df, train, base)
             n_res = sum(int(v.sum()) for v in data_fit[3].values())
             typical = base.wall_time_s / max(base.nfev, 1)
-            rows = _screen(cand, names, x_hat, base.extras["jacobian"], params,
-                           ((build, fixed), {"options": options, "typical_s": typical,
-                                             "state": state}),
-                           data_fit, pool)
+            rows = screen_candidates(cand, names, x_hat, base.extras["jacobian"], params,
+                                     ((build, fixed), {"options": options,
+                                                       "typical_s": typical, "state": state}),
+                                     data_fit, pool)
             timing["screen_s"] = time.perf_counter() - t0
             timing["screen_simulations"] = sum(r["simulations"] for r in rows)
             t0 = time.perf_counter()
@@ -394,18 +292,19 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
                 if nb["floor"] < floor:
                     noise, floor = nb, nb["floor"]
                     noise["model"] = best
+                    fitting.floor = floor
                 verdict, accepted = decide(steps, floor, tolerance)
-                usable = [n for n in fitted[1:] if not _at_bound(fits[n], params)]
-                if verdict == "unexplained" and usable \
-                        and steps[1].held_out < steps[0].held_out:
-                    nxt = usable[0]
-                    say(f"fitting {best} + {nxt}")
-                    pair = fitting.pair(fits[best], fits[nxt], max_nfev, notes)
-                    if pair is not None:
-                        fits[f"{best} + {nxt}"] = pair
-                    if pair is not None and pair.error(test) < steps[-1].held_out:
-                        steps.append(Step(nxt, pair.error(test), effects=(best, nxt)))
-                    verdict, accepted = decide(steps, floor, tolerance)
+                if verdict == "unexplained" and steps[1].held_out < steps[0].held_out:
+                    t0 = time.perf_counter()
+                    seconds = _second_effects(fits, best, fitted, cand, params, fitting,
+                                              (build, fixed, options, state), df, train, pool,
+                                              say)
+                    _fit_pairs(fits, best, seconds, steps, fitting, 4 * max_nfev, notes, say)
+                    if _needs_both(fits, best, steps, fitting, 4 * max_nfev, say):
+                        ranking = [r if r["effect"] != best else
+                                   _row(best, fits[best], test, floor, fitting.starts.get(best))
+                                   for r in ranking]
+                    timing["second_effect_s"] = time.perf_counter() - t0
         # the steps' floor ratios may have changed with the floor: decide once more
         verdict, accepted = decide(steps, floor, tolerance)
         final = fits[" + ".join(accepted)] if accepted else base
@@ -484,17 +383,84 @@ class _Fitting:
              "held_out_rms": fit.error(self.test), "simulations": fit.extras.get("simulations")})
         return fit
 
-    def pair(self, first: TraceFit, second: TraceFit, max_nfev, notes) -> TraceFit | None:
-        """Both effects at once, started from ``first``'s values with ``second``'s own
-        effect parameters (never values a failed fit left at a bound)."""
-        e1, e2 = first.effects[0], second.effects[0]
-        x_start = dict(first.values)
-        x_start.update({k: second.values[k] for k in e2.params})
+    def pair(self, effects, x_start, max_nfev, notes) -> TraceFit | None:
+        """Two effects at once from ``x_start`` (a single fit's own values and the
+        second's start, never values a failed fit left at a bound); None (and why in
+        ``notes``) when it fails."""
         try:
-            return self._fit((e1, e2), x_start, max_nfev)
+            return self._fit(effects, x_start, max_nfev)
         except SolverError as err:
-            notes.append(f"{e1.name} + {e2.name}: fit failed: {err}")
+            notes.append(f"{' + '.join(e.name for e in effects)}: fit failed: {err}")
             return None
+
+
+def _second_effects(fits, best, fitted, cand, params, fitting, model_setup, df, train, pool,
+                    say):
+    """Second effects to fit with ``best`` (a single effect that improved on the base
+    model but did not reach the floor), each with its start values: the best of every
+    other candidate screened again on top of ``best``'s fit (an effect the wrong base
+    model hid: its screen ran around a base fit bent to mimic two effects), then the next
+    single fit that did not stop at a bound, started from ``best``'s values."""
+    first = fits[best]
+    build, fixed, options, state = model_setup
+    names = list(first.values)
+    p2 = {**params, **first.effects[0].params}
+    others = [e for e in cand if e.name != best]
+    out = []
+    if others:
+        say(f"screening {len(others)} candidate effects on top of {best}")
+        typical = first.wall_time_s / max(first.nfev, 1)
+        rows = screen_candidates(
+            others, names, np.log([first.values[k] for k in names]), first.extras["jacobian"],
+            p2, ((build, fixed), {"options": options, "typical_s": typical, "state": state}),
+            _fit_data(df, train, first), pool, on_top=first.effects)
+        if math.isfinite(rows[0]["rss"]):
+            out.append((rows[0]["effect"], rows[0]["x"]))
+    usable = [n for n in fitted[1:] if not _at_bound(fits[n], params)]
+    if usable and all(e.name != usable[0] for e, _ in out):
+        e2 = fits[usable[0]].effects[0]
+        out.append((e2, {**first.values, **{k: fits[usable[0]].values[k] for k in e2.params}}))
+    return out
+
+
+def _fit_pairs(fits, best, seconds, steps, fitting, max_nfev, notes, say):
+    """Fit ``best`` with each second effect of ``seconds`` in turn until a pair reaches
+    the floor; the best pair so far is the waterfall's last step."""
+    test, floor, tolerance = fitting.test, fitting.floor, fitting.tolerance
+    for nxt, x_start in seconds:
+        say(f"fitting {best} + {nxt.name}")
+        pair = fitting.pair((fits[best].effects[0], nxt), x_start, max_nfev, notes)
+        name = f"{best} + {nxt.name}"
+        if pair is None or (name in fits and fits[name].error(test) <= pair.error(test)):
+            continue
+        fits[name] = pair
+        if pair.error(test) < steps[-1].held_out:
+            if len(steps) > 2:
+                steps.pop()
+            steps.append(Step(nxt.name, pair.error(test), effects=(best, nxt.name)))
+        if at_floor(pair.error(test), floor, tolerance):
+            break
+
+
+def _needs_both(fits, best, steps, fitting, max_nfev, say) -> bool:
+    """Parsimony: when a pair reached the floor, ``best`` alone again from the pair's
+    values (a single fit that stopped in a wrong valley, a second effect making up for
+    it); True when that single fit is better than ``best``'s first (it replaces it)."""
+    test, floor, tolerance = fitting.test, fitting.floor, fitting.tolerance
+    if len(steps) < 3 or not at_floor(steps[-1].held_out, floor, tolerance):
+        return False
+    pair = fits[" + ".join(steps[-1].effects)]
+    drop = pair.effects[1].params
+    say(f"fitting {best} again from the pair's values")
+    again = fitting.start(pair.effects[0], {k: v for k, v in pair.values.items()
+                                            if k not in drop}, max_nfev)
+    if again is None or again.error(test) >= fits[best].error(test):
+        return False
+    fits[best] = again
+    steps[1] = Step(best, again.error(test), effects=(best,))
+    if at_floor(again.error(test), floor, tolerance):
+        steps.pop()  # the second effect is not needed
+    return True
 
 
 def _second_start(spec, first):

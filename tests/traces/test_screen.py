@@ -10,7 +10,7 @@ from pneunet.analysis.circuits import oscillator
 from pneunet.engine.circuit import Circuit
 from pneunet.errors import SolverError
 from pneunet.traces import synthetic_trace
-from pneunet.traces.diagnosis import _ScreenTask
+from pneunet.traces.screen import ScreenTask
 from pneunet.traces.effects import candidates_for
 
 BASE = {"Rout": 1.132, "Rvent": 3.0, "V": 50.0}
@@ -26,7 +26,7 @@ def _task(point):
     x = np.log(list(BASE.values()))
     jac = np.ones((t.size, len(NAMES)))
     bounds = (x - 2.0, x + 2.0)
-    return _ScreenTask(eff, point, NAMES, x, jac, bounds, ((oscillator, {}), {"typical_s": 0.05}),
+    return ScreenTask(eff, point, NAMES, x, jac, bounds, ((oscillator, {}), {"typical_s": 0.05}),
                        data)
 
 
