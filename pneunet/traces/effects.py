@@ -79,12 +79,30 @@ class CircuitEffect(ABC):
         return f"{type(self).__name__}({self.name!r})"
 
 
-def _gas_volumes(circuit):
-    """The isothermal volumes and actuators of ``circuit`` (what heat exchange edits)."""
-    return [s for s in circuit.elements.values() if s.kind in ("volume", "actuator")]
+def _gas_volumes(circuit, names=None):
+    """The isothermal volumes and actuators of ``circuit`` (what heat exchange edits), only
+    those named in ``names`` when given."""
+    return [s for s in circuit.elements.values() if s.kind in ("volume", "actuator")
+            and (names is None or s.name in names)]
 
 
-class PolytropicVolume(CircuitEffect):
+class _VolumesEffect(CircuitEffect):
+    """An effect on the gas volumes of a circuit: bound by :meth:`candidates` to the
+    volumes the circuit has, so that a volume another effect adds (a tube's, a dead
+    volume) is not changed with them, whatever order the effects are applied in."""
+
+    def __init__(self, volumes: tuple | None = None):
+        self.volumes = None if volumes is None else tuple(volumes)
+
+    def candidates(self, circuit):
+        found = _gas_volumes(circuit)
+        return [type(self)(tuple(s.name for s in found))] if found else []
+
+    def _targets(self, circuit):
+        return _gas_volumes(circuit, self.volumes)
+
+
+class PolytropicVolume(_VolumesEffect):
     """Every volume compresses polytropically with one exponent n."""
 
     name = "polytropic_volume"
@@ -93,15 +111,12 @@ class PolytropicVolume(CircuitEffect):
     description = "volumes exchange only part of their compression heat (p·V^n constant)"
     params = {"n": (1.02, 1.0, 1.67)}
 
-    def candidates(self, circuit):
-        return [self] if _gas_volumes(circuit) else []
-
     def apply(self, circuit, values):
-        for spec in _gas_volumes(circuit):
+        for spec in self._targets(circuit):
             spec.params["n"] = float(values["n"])
 
 
-class VolumeHeatTransfer(CircuitEffect):
+class VolumeHeatTransfer(_VolumesEffect):
     """Every volume with a gas energy balance and wall heat transfer of time constant τ."""
 
     name = "volume_heat_transfer"
@@ -111,16 +126,13 @@ class VolumeHeatTransfer(CircuitEffect):
     description = "gas temperature in the volumes follows compression and relaxes to the wall"
     params = {"tau": (0.01, 0.002, 50.0)}
 
-    def candidates(self, circuit):
-        return [self] if _gas_volumes(circuit) else []
-
     def apply(self, circuit, values):
         """A volume with one line becomes a ``thermal_volume``; one filled and emptied
         through several becomes a ``thermal_chamber`` with a ``thermal_inlet`` per line,
         so that each line carries its own enthalpy."""
         import numpy as np
 
-        for spec in _gas_volumes(circuit):
+        for spec in self._targets(circuit):
             p = spec.params
             V = p["V"]
             if spec.kind == "actuator" and np.isnan(V):

@@ -51,3 +51,21 @@ def test_an_effect_without_apply_cannot_be_made():
 
     with pytest.raises(TypeError):
         Nothing()
+
+
+def test_heat_exchange_changes_only_the_volumes_the_circuit_had():
+    """Bound by ``candidates`` to the netlist's volumes: a tube's volume added by another
+    effect, before or after, stays isothermal (a thin tube's gas is at wall temperature;
+    one shared τ with a 200 mL tank would make its 5 mL adiabatic)."""
+    base = oscillator({})
+    effects = {e.name: e for e in candidates_for(base)}
+    heat, tube = effects["volume_heat_transfer"], effects["tube@X1.ctrl"]
+    values = {"tau": 0.5, "R_tube@X1.ctrl": 1.0, "V_tube@X1.ctrl": 5.0}
+    for order in ((tube, heat), (heat, tube)):
+        c = oscillator({})
+        for e in order:
+            e.apply(c, values)
+        kinds = {s.name: s.kind for s in c.elements.values()}
+        assert kinds["Vtube_X1_ctrl"] == "volume"
+        assert [n for n, k in kinds.items() if k in ("thermal_volume", "thermal_chamber")] \
+            == ["V1"]
