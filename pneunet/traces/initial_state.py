@@ -5,7 +5,10 @@ later, with its own clock.  A fit that starts the simulation at the netlist's re
 state compares a start-up transient with a settled recording.  Three start states:
 
 * ``rest``: the netlist's initial state (``.ic``, volumes' p0, ambient) at the first
-  sample — a recording made from switch-on;
+  sample — a recording made from switch-on; for a driven circuit recorded from netlist
+  time t0 > 0, the rest state at switch-on (or a record's length before t0, whichever is
+  later) driven by its sources up to t0, so that states the record does not hold (a
+  control line's pressure, a gas temperature) carry their history;
 * ``record``: the state read from the recording — every recorded storage node at the
   pressure its first samples extrapolate to at t = 0 (a parabola through them), a
   recorded algebraic node's value picks its branch (a valve open or closed), an
@@ -62,7 +65,8 @@ class StartState:
     ``mode`` rest/record/settled; ``pressures`` {node: kPa} imposed at the first sample;
     ``guesses`` {algebraic node: kPa} that pick its branch; ``fitted`` {``p0@NODE``:
     (guess, low, high)} initial pressures fitted with the parameters; ``time_offset``
-    netlist time of the first sample (s); ``settle`` s simulated before it (settled);
+    netlist time where the simulation starts (s); ``settle`` s simulated from there before
+    the first sample (the settled cycle; a driven circuit's history from rest);
     ``driven``: the sources vary during the record (no cycle alignment); ``signals``
     {element signal: first recorded value} that set the elements' own states."""
 
@@ -93,8 +97,8 @@ class StartState:
 
     def describe(self) -> str:
         """One line for the report."""
-        clock = f", netlist time {self.time_offset:g} s at the first sample" \
-            if self.time_offset else ""
+        clock = f", netlist time {self.first_time:g} s at the first sample" \
+            if self.first_time and self.mode != "settled" else ""
         kind = "driven by its sources" if self.driven else "autonomous"
         if self.mode == "record":
             given = ", ".join(f"{n} {p:.4g} kPa" for n, p in self.pressures.items())
@@ -110,6 +114,9 @@ class StartState:
             text = "; ".join(parts)
         elif self.mode == "settled":
             text = f"settled cycle ({self.settle:.3g} s simulated from rest, aligned in phase)"
+        elif self.settle:
+            text = (f"rest state of the netlist at netlist time {self.time_offset:g} s, "
+                    f"driven by its sources for {self.settle:.4g} s to the first sample")
         else:
             text = "rest state of the netlist at the first sample"
         return f"{text}; circuit {kind}{clock}" + (f" ({self.reason})" if self.reason else "")
@@ -284,7 +291,17 @@ def choose_start(model, values: dict, data, mode: str = "auto",
         off_rest = _other_branches(circuit, offset, rest, measured_algebraic)
     if mode == "rest" or (mode == "auto" and not off_rest):
         reason = "the first samples match the rest state" if mode == "auto" else "forced"
-        return StartState("rest", time_offset=offset, driven=driven, reason=reason)
+        # a driven circuit's unrecorded states (a control line's pressure, a gas
+        # temperature) carry its sources' recent history: run them from rest before the
+        # first sample, from switch-on (netlist time 0) or a record's length earlier, a
+        # whole number of sample spacings (the simulation's output falls on the samples)
+        history = min(offset, span) if driven else 0.0
+        if history > 0 and len(times) > 1:
+            dt = float(np.median(np.diff(times)))
+            history = math.floor(history / dt + 1e-9) * dt
+            history = offset if offset - history < 1e-9 * dt else history
+        return StartState("rest", time_offset=offset - history, settle=history,
+                          driven=driven, reason=reason)
     pressures = {n: v for n, (v, _) in recorded.items() if n in storage}
     guesses = {n: v for n, (v, _) in recorded.items() if n in algebraic}
     fitted = {f"{P0_PREFIX}{n}": (float(np.clip(implied.get(n, rest[n]), lo, hi)), lo, hi)

@@ -148,6 +148,36 @@ def test_driven_circuit_is_compared_on_its_own_clock_and_covers_the_truth(tmp_pa
     assert math.isfinite(fit.error()) and fit.error() < 0.4
 
 
+def test_driven_recording_from_mid_run_carries_its_unrecorded_states_history():
+    """The amplifier with a tube (R 5 kPa·s/mg, 5 mL) on the in-valve's control line,
+    recorded from 5.23 s on the sources' clock: the control source switched at 5 s and
+    the tube's inner pressure, which no column holds, is still falling.  The start is
+    the rest state at switch-on driven through 5.23 s of the sources: at the true values
+    pneunet reproduces the stand-alone record to 0.1 kPa; the rest state at the first
+    sample (the tube settled) is off by more than 10 kPa."""
+    from pneunet.traces.effects import candidates_for
+    from pneunet.traces.initial_state import StartState
+
+    rec = amplifier_record(5.23, 6.0, dt=0.01, noise=0.0, seed=5, R_line=0.24, V=30.0,
+                           tube_ctrl=(5.0, 5.0))
+    build = NetlistBuilder(AMPLIFIER)
+    tube = next(e for e in candidates_for(build({})) if e.name == "tube@Xin.ctrl")
+    truth = {"Rtube.R": 0.24, "Amck.V": 30.0, "R_tube@Xin.ctrl": 5.0, "V_tube@Xin.ctrl": 5.0}
+    model = TraceModel(build, effects=(tube,))
+    df = read_trace(rec)
+    state = choose_start(model, truth, df)
+    assert (state.mode, state.time_offset, state.driven) == ("rest", 0.0, True)
+    assert state.first_time == pytest.approx(5.23)
+    t = df["time_s"].to_numpy() - df["time_s"].iloc[0]
+
+    def rms(start):
+        sim, _ = model.with_state(start).sample(truth, t, ["p_muscle"])
+        return float(np.sqrt(np.mean((sim["p_muscle"] - rec["p_muscle_kPa"]) ** 2)))
+
+    assert rms(state) < 0.1
+    assert rms(StartState("rest", time_offset=5.23, driven=True)) > 10.0
+
+
 def test_settled_start_is_refused_for_a_driven_circuit():
     from pneunet.errors import ParameterError
 
