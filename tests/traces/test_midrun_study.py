@@ -77,12 +77,7 @@ def test_clean_driven_recording_is_adequate_and_covered():
     ((("heat_tau", 1.0),), {"volume_heat_transfer"}),
     ((("V_act", 6.0),), {"dead_volume@act"}),
     ((("tube_ctrl", (5.0, 5.0)),), {"tube@Xin.ctrl"}),
-    pytest.param((("heat_tau", 1.0), ("tube_ctrl", (5.0, 5.0))),
-                 {"volume_heat_transfer", "tube@Xin.ctrl"},
-                 marks=pytest.mark.xfail(strict=True, reason=(
-                     "two effects at once on the driven circuit are not found yet: the base "
-                     "fit ends at R_line's bound (61× the floor), the tube alone reaches "
-                     "22×, and no pair is formed"))),
+    ((("heat_tau", 1.0), ("tube_ctrl", (5.0, 5.0))), {"volume_heat_transfer", "tube@Xin.ctrl"}),
 ])
 def test_driven_hidden_effect_is_named(case, expected):
     d = driven(case)
