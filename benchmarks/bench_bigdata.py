@@ -27,8 +27,8 @@ SAMPLES = ROOT / "examples" / "data"
 def bench_file(rows: int, path: Path) -> Path:
     """A long bench log: the paper's protocol on the axi valve run again and again
     (seed k for run k, times continuing), cut at ``rows`` data rows."""
-    from pneunet.identify import simulate_bench
-    from pneunet.valve_params import PAPER_VALVES
+    from pneunet.truth.valves.identify import simulate_bench
+    from pneunet.physics.valve_params import PAPER_VALVES
 
     if path.exists():
         return path

@@ -19,11 +19,11 @@ LIMIT_S = 60.0
 def timing(scenario: str, seed: int) -> int:
     from threadpoolctl import threadpool_limits
 
-    from pneunet.diagnose import diagnose
-    from pneunet.diagnose.fitting import fit_model, initial_params
-    from pneunet.diagnose.features import prepare
-    from pneunet.diagnose.scenarios import bench, scenario_truth
-    from pneunet.effects import ValveModel
+    from pneunet.truth.valves.diagnose import diagnose
+    from pneunet.truth.valves.diagnose.fitting import fit_model, initial_params
+    from pneunet.truth.valves.diagnose.features import prepare
+    from pneunet.truth.valves.diagnose.scenarios import bench, scenario_truth
+    from pneunet.physics.valve_effects import ValveModel
 
     data = bench(scenario_truth(scenario), seed=seed)
     df, _ = prepare(data)
@@ -46,7 +46,8 @@ def timing(scenario: str, seed: int) -> int:
 
 
 def confusion(seed: int) -> int:
-    from pneunet.diagnose.scenarios import LIBRARY_SCENARIOS, UNLISTED_SCENARIOS, run_scenario
+    from pneunet.truth.valves.diagnose.scenarios import (LIBRARY_SCENARIOS, UNLISTED_SCENARIOS,
+                                                         run_scenario)
 
     names = (["clean"] + list(LIBRARY_SCENARIOS) + list(UNLISTED_SCENARIOS)
              + ["leak+hysteresis", "choked+laminar", "internal-drop+leak"])

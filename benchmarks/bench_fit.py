@@ -35,9 +35,9 @@ def main(argv=None):
     from scipy.optimize import curve_fit
     from sklearn.svm import SVC
 
-    from pneunet.identify import fit_valve, simulate_bench
-    from pneunet.laws import valve_flow
-    from pneunet.valve_params import PAPER_VALVES
+    from pneunet.truth.valves.identify import fit_valve, simulate_bench
+    from pneunet.physics.laws import valve_flow
+    from pneunet.physics.valve_params import PAPER_VALVES
 
     truth = PAPER_VALVES["axi"]
     data = simulate_bench(truth, seed=0)

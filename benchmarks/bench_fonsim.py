@@ -98,8 +98,8 @@ def _matched_temperature():
 def pneunet_oscillator(t_stop, rtol=1e-5):
     """The paper's oscillator (axi valve, R_out = 2·R_f, 200 mL tank, 1 mL at the valve
     output) venting to FONSim's atmosphere: (Oscillation of the tank pressure, seconds)."""
-    from pneunet.analysis.oscillation import analyze_oscillation
-    from pneunet.paper_circuits import oscillator
+    from pneunet.engine.oscillation import analyze_oscillation
+    from pneunet.design.paper_circuits import oscillator
 
     c = oscillator(p_low=P_ATM / 1e3, V_out=1.0, temperature=_matched_temperature(),
                    rtol=rtol, atol=rtol)
@@ -111,7 +111,7 @@ def pneunet_oscillator(t_stop, rtol=1e-5):
 
 def fonsim_oscillator(t_stop):
     """The same oscillator in FONSim with a user-written membrane valve component (the
-    law and partials of :mod:`pneunet.laws`): (Oscillation, seconds), or None."""
+    law and partials of :mod:`pneunet.physics.laws`): (Oscillation, seconds), or None."""
     try:
         import fonsim as fons
         from fonsim.components.terminals import terminal_fluidic
@@ -119,9 +119,9 @@ def fonsim_oscillator(t_stop):
         from fonsim.core.terminal import Terminal
     except ImportError:
         return None
-    from pneunet.analysis.oscillation import analyze_oscillation
-    from pneunet.laws import valve_flow_and_partials
-    from pneunet.valve_params import PAPER_VALVES
+    from pneunet.engine.oscillation import analyze_oscillation
+    from pneunet.physics.laws import valve_flow_and_partials
+    from pneunet.physics.valve_params import PAPER_VALVES
 
     axi = PAPER_VALVES["axi"].as_dict()
 
@@ -242,7 +242,7 @@ def pneunet_balloon(curve, t_stop=8.0, rtol=1e-5):
     89 kPa (over its 87 kPa peak) from 3 to 4.2 s: ((V before, V after) mL, volume on the
     GRID, seconds)."""
     from pneunet import Circuit
-    from pneunet.waveforms import PiecewiseLinear
+    from pneunet.physics.waveforms import PiecewiseLinear
 
     amb = P_ATM / 1e3
     r = 4 / (math.pi * D ** 2) * math.sqrt(K_FACTOR * P_ATM / RHO_STP) * 1e-9

@@ -50,7 +50,7 @@ def build(n, rtol=1e-5, atol=1e-5, delays=None, method="auto"):
     """The network of N cells; ``delays`` (n,) s: each cell's control delay (default:
     staggered over PHASES groups)."""
     from pneunet import Circuit
-    from pneunet.waveforms import Pulse
+    from pneunet.physics.waveforms import Pulse
 
     if delays is None:
         delays = 0.25 * (np.arange(n) % PHASES) + 0.2
@@ -288,7 +288,7 @@ def oscillator_process_time(period_rtol=1e-3):
     period only as that volume shrinks: it gets the largest dead volume and
     loosest reltol whose period is within ``period_rtol`` of pneunet's at rtol 1e-8.
     """
-    from pneunet.paper_circuits import oscillator
+    from pneunet.design.paper_circuits import oscillator
 
     repo = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     netlist = os.path.join(repo, "netlists", "oscillator.pn")

@@ -89,9 +89,9 @@ def main():
     ap.add_argument("--cluster", action="store_true",
                     help="also run on a dask scheduler + 2 single-thread workers started here")
     args = ap.parse_args()
-    from pneunet.analysis.circuits import oscillator
-    from pneunet.analysis.regime import RegimeMeasure, agreement
-    from pneunet.analysis.sweep import grid, lin, run_sweep
+    from pneunet.design.circuits import oscillator
+    from pneunet.design.regime import RegimeMeasure, agreement
+    from pneunet.design.sweep import grid, lin, run_sweep
 
     pts = grid(lin("Rout", 0.2, 3.0, args.n), lin("Rvent", 1.0, 6.0, args.n))
     analysis = RegimeMeasure(t_stop=args.t_stop)

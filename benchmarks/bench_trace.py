@@ -27,9 +27,9 @@ def main(argv=None) -> None:
                     help="s after switch-on at which the recording starts (its clock from 0)")
     args = ap.parse_args(argv)
 
-    from pneunet.analysis.circuits import oscillator
-    from pneunet.traces import diagnose_trace, fit_trace, split_by_cycles, synthetic_trace
-    from pneunet.traces.model import process_pool
+    from pneunet.design.circuits import oscillator
+    from pneunet.truth.circuits import diagnose_trace, fit_trace, split_by_cycles, synthetic_trace
+    from pneunet.truth.circuits.model import process_pool
 
     true = {"Rout": 1.132, "Rvent": 3.0, "V": args.V, "n": args.n}
     rec = synthetic_trace(oscillator, true, args.start + args.t_end, dt=0.05, noise=0.4,

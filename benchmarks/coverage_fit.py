@@ -29,9 +29,9 @@ VALVES = ("axi", "mirror_forward", "mirror_backward")
 
 def one(task):
     name, seed, options = task
-    from pneunet.identify import fit_valve, simulate_bench
-    from pneunet.identify.fit import NAMES
-    from pneunet.valve_params import PAPER_VALVES
+    from pneunet.truth.valves.identify import fit_valve, simulate_bench
+    from pneunet.truth.valves.identify.fit import NAMES
+    from pneunet.physics.valve_params import PAPER_VALVES
 
     truth = PAPER_VALVES[name]
     data = simulate_bench(truth, seed=seed)
@@ -55,7 +55,7 @@ def one(task):
 
 
 def summarise(table: pd.DataFrame) -> str:
-    from pneunet.identify.fit import NAMES
+    from pneunet.truth.valves.identify.fit import NAMES
 
     table = table.copy()
     table["z"] = (table["value"] - table["truth"]) / table["stderr"]

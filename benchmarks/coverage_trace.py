@@ -44,7 +44,7 @@ DRIVEN_PARAMS = {"Rtube.R": (0.25, 0.02, 2.0), "Amck.V": (35.0, 5.0, 200.0)}
 
 def oscillator_case(rng):
     """(recording, truth, fit parameters, build, cycle node)."""
-    from pneunet.analysis.circuits import oscillator
+    from pneunet.design.circuits import oscillator
     from tests.traces.standalone import oscillator_record
 
     while True:  # parameters where the circuit oscillates (a 30 kPa swing or more)
@@ -62,7 +62,7 @@ def oscillator_case(rng):
 
 
 def driven_case(rng):
-    from pneunet.analysis.sweep import NetlistBuilder
+    from pneunet.netlist.builder import NetlistBuilder
     from tests.traces.standalone_driven import amplifier_record
 
     truth = {"Rtube.R": float(np.exp(rng.uniform(np.log(0.1), np.log(0.5)))),
@@ -79,7 +79,7 @@ CIRCUITS = {"oscillator": oscillator_case, "driven": driven_case}
 
 
 def run_one(kind, rng):
-    from pneunet.traces import diagnose_trace
+    from pneunet.truth.circuits import diagnose_trace
 
     rec, truth, params, build, node, info = CIRCUITS[kind](rng)
     t0 = time.perf_counter()

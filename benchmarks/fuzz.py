@@ -222,9 +222,9 @@ def _read_csv(path: Path) -> None:
     """Read ``path`` as bench data (``fit``, ``diagnose``) and as a recording
     (``fit-trace``): ok when one reader accepts it and the other fails with a location;
     else its unlocated error first, or the first error."""
-    from pneunet.errors import PneunetError
-    from pneunet.identify import load_measurements
-    from pneunet.traces.data import read_trace
+    from pneunet.common.errors import PneunetError
+    from pneunet.truth.valves.identify import load_measurements
+    from pneunet.truth.circuits.data import read_trace
 
     errors = []
     for read in (load_measurements, read_trace):
@@ -382,7 +382,7 @@ def _code_folders():
 
 def run_case(target: Target, data: bytes, folder: Path, timeout: float = 10.0):
     """(outcome, detail) of reading ``data`` as a file of ``target`` in ``folder``."""
-    from pneunet.errors import PneunetError
+    from pneunet.common.errors import PneunetError
 
     path = folder / f"case{target.suffix}"
     path.write_bytes(data)

@@ -25,7 +25,7 @@ VARIANTS = [(5, 20, 1.0, 2.0, 1), (40, 80, 6.0, 8.0, 2), (2, 30, 2.0, 3.0, 3)]
 def build(n, method, rtol, v_line, v_act, r_vent, r_ctl, seed):
     """N cells on one supply line; every cell its own control delay."""
     from pneunet import Circuit
-    from pneunet.waveforms import Pulse
+    from pneunet.physics.waveforms import Pulse
 
     delays = np.random.default_rng(seed).uniform(0.1, 3.0, n)
     c = Circuit("multirate variant", rtol=rtol, atol=min(rtol, 1e-5), ambient=AMBIENT,

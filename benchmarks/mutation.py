@@ -31,15 +31,15 @@ PYTEST = "python -m pytest -x -q -n 0 -p no:cacheprovider"
 
 #: module → (path, fast tests that guard it)
 MODULES = {
-    "verdict": ("pneunet/truth/verdict.py",
+    "verdict": ("pneunet/truth/core/verdict.py",
                 "tests/diagnose/test_verdict_threshold.py"),
-    "intervals": ("pneunet/truth/intervals.py",
+    "intervals": ("pneunet/truth/core/intervals.py",
                   "tests/diagnose/test_interval_sandwich.py "
                   "tests/diagnose/test_interval_coverage.py"),
-    "laws": ("pneunet/laws.py",
+    "laws": ("pneunet/physics/laws.py",
              "tests/core/test_law_partials.py tests/core/test_valve_law_reference.py "
              "tests/core/test_scalar_laws.py tests/core/test_element_conformance.py"),
-    "noise": ("pneunet/truth/noise.py",
+    "noise": ("pneunet/truth/core/noise.py",
               "tests/diagnose/test_noise_floor.py tests/diagnose/test_logic.py"
               "::test_noise_floor_estimate_follows_flow_dependent_noise"),
     "includes": ("pneunet/netlist/includes.py",
@@ -48,7 +48,7 @@ MODULES = {
                  "tests/core/test_assembly.py tests/core/test_algebraic_block.py "
                  "tests/core/test_element_conformance.py "
                  "-k 'assembly or algebraic or jacobian or fast_flows'"),
-    "valves": ("pneunet/elements/valves.py",
+    "valves": ("pneunet/physics/elements/valves.py",
                "tests/core/test_valve_family_routes.py tests/core/test_valve_law_reference.py "
                "tests/core/test_scalar_laws.py tests/core/test_element_conformance.py "
                "tests/core/test_law_partials.py tests/netlist/test_hostile.py -k valve"),

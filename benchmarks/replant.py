@@ -39,12 +39,12 @@ class Bug:
 BUGS = {
     "eq19-saturation": Bug(
         "valve saturation term of eq. 19 dropped (1/R = u^e/R_f)",
-        (("pneunet/laws.py", "q = 1.0 + ue * ue", "q = 1.0 + 0.0 * ue"),),
+        (("pneunet/physics/laws.py", "q = 1.0 + ue * ue", "q = 1.0 + 0.0 * ue"),),
         ("tests/core/test_valve_law_reference.py", "tests/core/test_law_partials.py",
          "tests/core/test_paper_numbers.py")),
     "mckibben-end": Bug(
         "McKibben end correction dropped (k_end read as 1)",
-        (("pneunet/elements/mckibben.py", 'self.column("L0"), self.column("k_end")',
+        (("pneunet/physics/elements/mckibben.py", 'self.column("L0"), self.column("k_end")',
           'self.column("L0"), 0 * self.column("k_end") + 1'),),
         ("tests/core/test_mckibben.py",)),
     "fold-threshold": Bug(
@@ -65,22 +65,22 @@ BUGS = {
         ("tests/netlist/test_includes.py", "tests/netlist/test_include_rules.py")),
     "valve-z": Bug(
         "valve fit's 95 % intervals 1.8× too wide (z 1.96 → 3.5)",
-        (("pneunet/identify/fit.py", "Z95 = 1.959963984540054", "Z95 = 3.5"),),
+        (("pneunet/truth/valves/identify/fit.py", "Z95 = 1.959963984540054", "Z95 = 3.5"),),
         ("tests/identify/test_fit.py",)),
     "truth-z": Bug(
         "truth core's (circuit fits') intervals 1.8× too wide (t quantile × 1.786)",
-        (("pneunet/truth/intervals.py", "tq = stats.t.ppf(0.5 + confidence / 2, dof)",
+        (("pneunet/truth/core/intervals.py", "tq = stats.t.ppf(0.5 + confidence / 2, dof)",
           "tq = 1.786 * stats.t.ppf(0.5 + confidence / 2, dof)"),),
         ("tests/diagnose/test_interval_coverage.py", "tests/diagnose/test_interval_sandwich.py")),
     "diagnose-z": Bug(
         "a valve diagnosis' effect intervals 1.8× too wide (1.96 → 3.5 standard errors)",
-        (("pneunet/diagnose/fitting.py",
+        (("pneunet/truth/valves/diagnose/fitting.py",
           "return (self.values[i] - 1.96 * self.stderr[i], self.values[i] + 1.96 * self.stderr[i])",
           "return (self.values[i] - 3.5 * self.stderr[i], self.values[i] + 3.5 * self.stderr[i])"),),
         ("tests/diagnose/test_confusion.py",)),
     "verdict-tolerance": Bug(
         "verdict tolerance 1.5 → 2.5 × the noise floor",
-        (("pneunet/truth/verdict.py", "TOLERANCE = 1.5", "TOLERANCE = 2.5"),),
+        (("pneunet/truth/core/verdict.py", "TOLERANCE = 1.5", "TOLERANCE = 2.5"),),
         ("tests/diagnose/test_verdict_threshold.py",)),
     "yield-level": Bug(
         "yield's Wilson interval at 50 % instead of 95 %",
@@ -88,7 +88,7 @@ BUGS = {
         ("tests/design/test_yield.py",)),
     "eq25-reverse": Bug(
         "eq. 25's reverse-flow rule broken (a_in always on p_in: −606 for −531 mg/s)",
-        (("pneunet/laws.py",
+        (("pneunet/physics/laws.py",
           "return a_in * xp.maximum(p_in, p_out) + a_out * xp.minimum(p_in, p_out) - p_ctrl",
           "return a_in * p_in + a_out * p_out - p_ctrl"),),
         ("tests/core/test_valve_law_reference.py", "tests/core/test_law_partials.py")),

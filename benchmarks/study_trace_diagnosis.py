@@ -63,7 +63,7 @@ DRIVEN_TRUTH = {"Rtube.R": 0.24, "Amck.V": 30.0}
 
 
 def oscillator_case(name, seed, mid_run):
-    from pneunet.analysis.circuits import oscillator
+    from pneunet.design.circuits import oscillator
     from tests.traces.standalone import oscillator_record
 
     kw, expected = CASES[name]
@@ -75,7 +75,7 @@ def oscillator_case(name, seed, mid_run):
 
 
 def driven_case(name, seed):
-    from pneunet.analysis.sweep import NetlistBuilder
+    from pneunet.netlist.builder import NetlistBuilder
     from tests.traces.standalone_driven import amplifier_record
 
     kw, expected = DRIVEN[name]
@@ -101,7 +101,7 @@ def main(argv=None) -> None:
     ap.add_argument("--driven", action="store_true", help="the driven amplifier's cases")
     args = ap.parse_args(argv)
 
-    from pneunet.traces import diagnose_trace
+    from pneunet.truth.circuits import diagnose_trace
 
     table = DRIVEN if args.driven else CASES
     print("| case | start s | expected | verdict | accepted | held-out / floor (base → final) | "

@@ -3,7 +3,7 @@
 ``import pneunet`` stays light: the public names below are loaded on first use.
 
 Units everywhere: absolute pressure kPa, mass flow mg/s, resistance kPa·s/mg,
-volume mL, time s (see :mod:`pneunet.gas`).
+volume mL, time s (see :mod:`pneunet.physics.gas`).
 """
 from __future__ import annotations
 
@@ -17,20 +17,20 @@ _LAZY = {
     "transient": "pneunet.engine.simulate",
     "operating_point": "pneunet.engine.simulate",
     "Solution": "pneunet.engine.solution",
-    "save_run": "pneunet.runfile",
-    "read_run": "pneunet.runfile",
-    "ValveParams": "pneunet.valve_params",
-    "PAPER_VALVES": "pneunet.valve_params",
-    "waveforms": "pneunet.waveforms",
-    "PneunetError": "pneunet.errors",
-    "NetlistError": "pneunet.errors",
-    "TopologyError": "pneunet.errors",
-    "ParameterError": "pneunet.errors",
-    "DataError": "pneunet.errors",
-    "SolverError": "pneunet.errors",
-    "AIR": "pneunet.gas",
-    "Gas": "pneunet.gas",
-    "Liquid": "pneunet.liquids",
+    "save_run": "pneunet.interfaces.runfile",
+    "read_run": "pneunet.interfaces.runfile",
+    "ValveParams": "pneunet.physics.valve_params",
+    "PAPER_VALVES": "pneunet.physics.valve_params",
+    "waveforms": "pneunet.physics.waveforms",
+    "PneunetError": "pneunet.common.errors",
+    "NetlistError": "pneunet.common.errors",
+    "TopologyError": "pneunet.common.errors",
+    "ParameterError": "pneunet.common.errors",
+    "DataError": "pneunet.common.errors",
+    "SolverError": "pneunet.common.errors",
+    "AIR": "pneunet.physics.gas",
+    "Gas": "pneunet.physics.gas",
+    "Liquid": "pneunet.physics.liquids",
 }
 
 __all__ = sorted(_LAZY) + ["__version__"]

@@ -1,4 +1,4 @@
-"""The paper's six-parameter valve law written independently of pneunet.laws.
+"""The paper's six-parameter valve law written independently of pneunet.physics.laws.
 
 Eq. 19 in its published form (the variable resistance R_v = R_f·u^(−e) in quadrature
 with R_f), eq. 25 as two explicit branches (a_in on the port with the higher pressure),

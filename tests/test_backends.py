@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from pneunet import Circuit
-from pneunet.paper_circuits import oscillator
+from pneunet.design.paper_circuits import oscillator
 from pneunet.engine.simulate import transient
 from pneunet.engine.solvers import available_backends
 
@@ -59,7 +59,7 @@ def test_odes_with_dead_volumes_matches():
 
 @needs_odes
 def test_odes_stops_exactly_on_breakpoints():
-    from pneunet.waveforms import Pulse
+    from pneunet.physics.waveforms import Pulse
 
     c = Circuit("pulse")
     c.pressure_source("P", "src", Pulse(101.325, 300.0, delay=0.3, rise=0.1, width=0.7))
@@ -73,7 +73,7 @@ def test_odes_stops_exactly_on_breakpoints():
 
 
 def test_unknown_backend_is_a_clear_error():
-    from pneunet.errors import SolverError
+    from pneunet.common.errors import SolverError
 
     with pytest.raises(SolverError, match="not installed"):
         transient(oscillator(), 1.0, backend="nonexistent")

@@ -50,8 +50,8 @@ def blocks(page: Path, study: bool):
 def run_page(page, tmp_path, study):
     import matplotlib
 
-    from pneunet.effects import available_effects, unregister_effect
-    from pneunet.traces.effects import registered_effects, unregister
+    from pneunet.physics.valve_effects import available_effects, unregister_effect
+    from pneunet.truth.circuits.effects import registered_effects, unregister
 
     matplotlib.use("Agg")
     for name in ("netlists", "examples"):

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from pneunet.cli import main
+from pneunet.interfaces.cli import main
 
 NETLISTS = Path(__file__).parents[1] / "netlists"
 RAW = re.compile(r"\[(WARNING|ERROR)\]\[rank|\[\w+, Error: -?\d+\]|\.c:\d+\]")
@@ -76,7 +76,7 @@ def test_branches_json_is_only_json_and_counts_the_solver_messages(capfd):
 
 @pytest.mark.parametrize("command", ["run", "sweep"])
 def test_q_silences_the_solver_warnings_of_every_command(tmp_path, capfd, monkeypatch, command):
-    from pneunet.engine import diagnostics
+    from pneunet.common import solver_messages as diagnostics
 
     monkeypatch.setattr(diagnostics, "_announced", set())  # shown once per process
     shipped = (NETLISTS / "oscillator.pn").read_text()

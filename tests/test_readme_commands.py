@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from pneunet.cli import main
+from pneunet.interfaces.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
 #: options that keep a README command short in the test (same code path, fewer replicates)

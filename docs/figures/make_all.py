@@ -26,11 +26,11 @@ def solution():
 
 def sweep():
     """``pneunet sweep --plot`` with one axis (plot_sweep) and two (plot_regime_map)."""
-    from pneunet.analysis.circuits import oscillator
-    from pneunet.analysis.regime import RegimeMeasure, plot_regime_map
-    from pneunet.analysis.sweep import (DeckMeasure, NetlistBuilder, OscillationMeasure, grid,
-                                        lin, run_sweep)
-    from pneunet.analysis.sweep_plot import plot_sweep
+    from pneunet.design.circuits import oscillator
+    from pneunet.design.regime import RegimeMeasure, plot_regime_map
+    from pneunet.design.sweep import DeckMeasure, OscillationMeasure, grid, lin, run_sweep
+    from pneunet.netlist.builder import NetlistBuilder
+    from pneunet.design.sweep_plot import plot_sweep
     from pneunet.netlist.runner import measure_unit
 
     one = run_sweep(oscillator, grid(lin("Rout", 0.0, 3.0, 13)),
@@ -48,8 +48,9 @@ def sweep():
 
 def branches():
     """``pneunet branches --plot`` / ``plot_branches``."""
-    from pneunet.analysis.branches import OscillatorSpec, plot_branches, stationary_branches
-    from pneunet.analysis.circuits import oscillator
+    from pneunet.physics.oscillator_branches import (OscillatorSpec, plot_branches,
+                                                     stationary_branches)
+    from pneunet.design.circuits import oscillator
 
     sol = oscillator({"Rout": 1.132}).tran(30.0)
     plot_branches(stationary_branches(OscillatorSpec(Rout=1.132)), OUT / "branches.png",
@@ -58,9 +59,9 @@ def branches():
 
 def design():
     """``plot_fill`` and ``plot_truth_table``."""
-    from pneunet.analysis import design
-    from pneunet.analysis.logic import plot_truth_table, truth_table
-    from pneunet.analysis.sweep import NetlistBuilder
+    from pneunet.design import sizing as design
+    from pneunet.design.logic import plot_truth_table, truth_table
+    from pneunet.netlist.builder import NetlistBuilder
 
     design.plot_fill(design.cylinder_volume(173, 20), 0.566, 596, 96, 296,
                      OUT / "fill_time.png", valve="axi")
@@ -70,17 +71,17 @@ def design():
 
 
 def identify():
-    """``pneunet fit --plots`` / ``pneunet.identify.plots.all_figures``."""
-    from pneunet.identify import fit_valve, load_measurements
-    from pneunet.identify.plots import all_figures
+    """``pneunet fit --plots`` / ``pneunet.truth.valves.identify.plots.all_figures``."""
+    from pneunet.truth.valves.identify import fit_valve, load_measurements
+    from pneunet.truth.valves.identify.plots import all_figures
 
     all_figures(fit_valve(load_measurements(BENCH)), OUT / "identify")
 
 
 def diagnose():
     """``pneunet diagnose --plots`` / ``Diagnosis.plots``."""
-    from pneunet.diagnose import diagnose as run
-    from pneunet.diagnose.scenarios import LIBRARY_SCENARIOS, bench, truth_model
+    from pneunet.truth.valves.diagnose import diagnose as run
+    from pneunet.truth.valves.diagnose.scenarios import LIBRARY_SCENARIOS, bench, truth_model
 
     leaky = truth_model({"leak": LIBRARY_SCENARIOS["leak"]})  # the axi valve with a leak
     run(bench(leaky, seed=0), progress=False).plots(OUT / "diagnose")
@@ -89,9 +90,9 @@ def diagnose():
 def traces():
     """``pneunet fit-trace --plot`` (plot_fit) and ``--candidates --waterfall``
     (plot_waterfall, also ``TraceDiagnosis.plots``)."""
-    from pneunet.analysis.circuits import oscillator
-    from pneunet.traces import diagnose_trace, fit_trace, read_trace
-    from pneunet.traces.plots import plot_fit, plot_waterfall
+    from pneunet.design.circuits import oscillator
+    from pneunet.truth.circuits import diagnose_trace, fit_trace, read_trace
+    from pneunet.truth.circuits.plots import plot_fit, plot_waterfall
 
     data = read_trace(RECORDING)
     fit = fit_trace(oscillator, data, {"Rvent": (3.5, 1.0, 10.0)}, fixed={"Rout": 1.132})
@@ -117,8 +118,8 @@ def tornado():
 def soft_robot():
     """``pneunet piping --plot`` / ``plot_piping`` (the paper's Fig. 1B arm, N = 4) and
     ``plot_control_lines`` (docs/soft-robot.md)."""
-    from pneunet.analysis.piping import (control_line_delays, piping_study, plot_control_lines,
-                                         plot_piping)
+    from pneunet.design.piping import (control_line_delays, piping_study, plot_control_lines,
+                                       plot_piping)
 
     plot_piping(piping_study(), OUT / "piping.png")
     plot_control_lines(control_line_delays(lengths=(500, 1000, 2000, 4000, 8000)),
@@ -127,7 +128,7 @@ def soft_robot():
 
 def mckibben():
     """``plot_muscle_run``: the paper's Fig. 12 run (netlists/fig12_mckibben.pn, 50 s)."""
-    from pneunet.analysis.muscle import plot_muscle_run
+    from pneunet.design.muscle import plot_muscle_run
     from pneunet.netlist import parse_file
 
     sol = parse_file(ROOT / "netlists" / "fig12_mckibben.pn").circuit.tran(50.0, t_step=0.01)
@@ -143,7 +144,7 @@ EXPANDED = ("inverter", "demux3", "demux6", "oscillators100")
 def schematics():
     """``pneunet draw``: the paper's circuits; the oscillator also at 12.5 s of its run;
     those with subcircuits also expanded."""
-    from pneunet.cli import main
+    from pneunet.interfaces.cli import main
 
     for name in SCHEMATICS + EXPANDED[3:]:
         main(["draw", str(ROOT / "netlists" / f"{name}.pn"),

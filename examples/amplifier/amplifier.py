@@ -13,8 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
-from pneunet.paper_circuits import CLIPPARD_LIKE, flow_amplifier
-from pneunet.plotting import pyplot, save
+from pneunet.design.paper_circuits import CLIPPARD_LIKE, flow_amplifier
+from pneunet.common.plotting import pyplot, save
 
 
 def rise_time(t, p, start, low=120.0, high=289.0, lo_frac=0.1, hi_frac=0.9):

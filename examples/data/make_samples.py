@@ -3,7 +3,7 @@
 this directory).
 
 * ``bench_axi.csv`` — static bench data of the paper's axi valve from the virtual bench
-  (:func:`pneunet.identify.simulate_bench`: the paper's protocol, 4410 held points in
+  (:func:`pneunet.truth.valves.identify.simulate_bench`: the paper's protocol, 4410 held points in
   210 sweeps; sensor noise, setpoint errors, seed 0).
 * ``oscillator_rec.csv`` — a 30 s recording of ``netlists/oscillator.pn`` (R_out =
   1.132 kPa·s/mg): ``p_tank_kPa`` and ``p_out_kPa`` every 50 ms with 0.4 kPa of noise.
@@ -19,8 +19,8 @@ ROOT = HERE.parent.parent
 
 
 def bench(path: Path) -> None:
-    from pneunet.identify import simulate_bench
-    from pneunet.valve_params import PAPER_VALVES
+    from pneunet.truth.valves.identify import simulate_bench
+    from pneunet.physics.valve_params import PAPER_VALVES
 
     data = simulate_bench(PAPER_VALVES["axi"], seed=0)
     columns = ["time_s", "p_in_kPa", "p_out_kPa", "p_ctrl_kPa", "mdot_mg_s", "sweep"]

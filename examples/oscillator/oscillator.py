@@ -9,7 +9,7 @@ import argparse
 from pathlib import Path
 
 from pneunet import Circuit
-from pneunet.analysis.oscillation import analyze_oscillation
+from pneunet.engine.oscillation import analyze_oscillation
 
 
 def build(r_out: float) -> Circuit:

@@ -3,15 +3,16 @@
 :class:`SpecMeasure` runs a netlist's own analyses (its ``.tran`` and ``.meas``) or, for a
 Python builder, a transient of ``t_stop`` seconds; then it measures the built-in
 oscillation metrics (:data:`~pneunet.design.spec.BUILTIN`) at the targets' nodes with
-:func:`~pneunet.analysis.oscillation.analyze_oscillation`.  A metric that cannot be
+:func:`~pneunet.engine.oscillation.analyze_oscillation`.  A metric that cannot be
 measured (no oscillation: no period) is NaN.
 """
 from __future__ import annotations
 
 import math
 
-from ..analysis.sweep import DeckMeasure, NetlistBuilder
-from ..errors import ParameterError
+from .sweep import DeckMeasure
+from ..netlist.builder import NetlistBuilder
+from ..common.errors import ParameterError
 
 
 def control_node(circuit) -> str:
@@ -25,7 +26,7 @@ def control_node(circuit) -> str:
 
 def builtin_metrics(t, p) -> dict:
     """Period (s), frequency (Hz), duty, swing, p_min, p_max (kPa) of the pressure p(t)."""
-    from ..analysis.oscillation import analyze_oscillation
+    from ..engine.oscillation import analyze_oscillation
 
     osc = analyze_oscillation(t, p)
     sustained = osc.oscillating

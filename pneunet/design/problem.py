@@ -3,7 +3,7 @@
 :class:`Problem` reads a netlist (or takes a Python builder), turns target strings into
 :class:`~pneunet.design.spec.Target` objects with the netlist's ``.meas`` units, checks
 that every parameter name exists before anything is simulated, and evaluates batches of
-points on the sweep machinery (:func:`~pneunet.analysis.sweep.run_sweep`) with one process
+points on the sweep machinery (:func:`~pneunet.design.sweep.run_sweep`) with one process
 pool (or dask client) for the whole design, counting the simulations.
 """
 from __future__ import annotations
@@ -11,7 +11,8 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from ..analysis import sweep as S
+from ..netlist.builder import name_hint
+from . import sweep as S
 from .metrics import SpecMeasure
 from .spec import check_meas_targets, parse_targets
 
@@ -42,7 +43,7 @@ class Problem:
         if isinstance(build, S.NetlistBuilder):
             check_meas_targets(self.targets, {m.name: m.kind for m in deck.measures})
         if not self.targets:
-            from ..errors import ParameterError
+            from ..common.errors import ParameterError
 
             raise ParameterError("no target given", hint="e.g. --target period=3s")
         self.analysis = SpecMeasure(self.targets, build if isinstance(build, S.NetlistBuilder)
@@ -55,7 +56,7 @@ class Problem:
     def check(self, point: dict) -> None:
         """Every name of ``point`` exists (did-you-mean otherwise), before simulating; a
         plain name that is no ``.param`` but an element parameter names ELEMENT.PARAM."""
-        from ..errors import PneunetError
+        from ..common.errors import PneunetError
 
         try:
             S.check_points(self.build, [dict(self.fixed, **point)])
@@ -76,7 +77,7 @@ class Problem:
 
     def _check_nodes(self, point: dict) -> None:
         """The nodes of the built-in metrics exist (did-you-mean otherwise)."""
-        from ..errors import ParameterError
+        from ..common.errors import ParameterError
         from .metrics import control_node
 
         builtin = [t for t in self.targets if t.source == "builtin"]
@@ -88,13 +89,13 @@ class Problem:
             node = t.node or self.analysis.node or control_node(circuit)
             if node not in circuit.nodes:
                 raise ParameterError(f"target {t.text!r}: no node {node!r}",
-                                     hint=S._did_you_mean(node, circuit.nodes, "nodes"))
+                                     hint=name_hint(node, circuit.nodes, "nodes"))
 
     def __enter__(self):
         """One process pool for every batch until the outermost ``with`` ends."""
         import os
 
-        from ..workers import process_pool
+        from ..common.workers import process_pool
 
         self._depth += 1
         if self._depth == 1 and self.executor is None and \
@@ -108,7 +109,7 @@ class Problem:
             if kind is None:
                 self._pool.shutdown(wait=True)
             else:
-                from ..workers import stop
+                from ..common.workers import stop
 
                 stop(self._pool)
             self._pool = None

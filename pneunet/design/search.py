@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..reprs import Summarized, listed
+from ..common.reprs import Summarized, listed
 from .problem import Problem
 from .spec import Range, make_range, parse_range, require_whole
 
@@ -140,7 +140,7 @@ def evaluate(problem: Problem, values: dict | None = None, start_time: float | N
 
 
 def _ranges(ranges) -> list[Range]:
-    from ..errors import ParameterError
+    from ..common.errors import ParameterError
 
     if isinstance(ranges, dict):
         out = []

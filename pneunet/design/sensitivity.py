@@ -70,7 +70,7 @@ def most_important(table) -> dict:
 def plot_tornado(table, nominal: dict, units: dict, path=None, top: int = 6):
     """One panel per metric: the metric's value ± one SD of each parameter (the ``top``
     largest, largest on top)."""
-    from ..plotting import pyplot, save
+    from ..common.plotting import pyplot, save
 
     plt = pyplot()
     metrics = list(dict.fromkeys(table["metric"]))

@@ -22,8 +22,8 @@ import math
 import re
 from dataclasses import dataclass
 
-from ..analysis.sweep import _did_you_mean
-from ..errors import ParameterError
+from ..netlist.builder import name_hint
+from ..common.errors import ParameterError
 
 #: built-in metric -> (unit slot, unit)
 BUILTIN = {"period": ("time", "s"), "frequency": ("frequency", "Hz"),
@@ -142,7 +142,7 @@ def parse_target(text: str, measures: dict | None = None, ambient_kpa: float = 9
                              hint="built-in metrics: " + ", ".join(BUILTIN))
     if name not in known:
         raise ParameterError(f"target {text!r}: unknown metric {name!r}",
-                             hint=_did_you_mean(name, list(known) + list(ALIASES), "metrics"))
+                             hint=name_hint(name, list(known) + list(ALIASES), "metrics"))
     slot, unit, source = known[name]
     if node:
         slot, unit, source = BUILTIN[name] + ("builtin",)
@@ -259,7 +259,7 @@ def _number(text: str, what: str) -> float:
 
 
 def _quantity(text: str, slot: str, what: str, ambient_kpa: float = 96.0) -> float:
-    from ..units import split_quantity, to_internal
+    from ..physics.units import split_quantity, to_internal
 
     text = text.strip()
     if slot == "dimensionless" and text.endswith("%"):

@@ -1,11 +1,11 @@
 """Manufacturing spread of parameters: stated tolerances and fitted covariances.
 
 A :class:`Spread` holds independent distributions (``X1.pclose`` ± 5 kPa, uniform, or
-normal with the interval as ±2σ: :func:`~pneunet.analysis.sweep.tolerance`) and
+normal with the interval as ±2σ: :func:`~pneunet.design.sweep.tolerance`) and
 correlated normal groups (a fitted valve's parameters with the covariance that
 ``pneunet fit --json`` reports, centred on the circuit's own values).  ``sample(n,
 seed)`` draws Monte Carlo points: the independent ones with
-:func:`~pneunet.analysis.sweep.monte_carlo` (seed ``seed``), each group with
+:func:`~pneunet.design.sweep.monte_carlo` (seed ``seed``), each group with
 ``numpy.random.default_rng([seed, i])``.
 """
 from __future__ import annotations
@@ -17,8 +17,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..analysis import sweep as S
-from ..errors import DataError, ParameterError
+from ..netlist.builder import name_hint
+from . import sweep as S
+from ..common.errors import DataError, ParameterError
 from .spec import Tolerance, parse_tolerance
 
 
@@ -85,7 +86,7 @@ def nominal(problem, point: dict, name: str) -> float:
         deck = problem.build.deck(full) if isinstance(problem.build, S.NetlistBuilder) else None
         if deck is None or name not in deck.params:
             raise ParameterError(f"spread of {name}: no .param {name!r}",
-                                 hint=S._did_you_mean(name, deck.params if deck else {},
+                                 hint=name_hint(name, deck.params if deck else {},
                                                       ".params") +
                                  "; an element parameter is ELEMENT.PARAM, e.g. X1.pclose")
         return float(deck.params[name])
@@ -93,7 +94,7 @@ def nominal(problem, point: dict, name: str) -> float:
     circuit = S.apply_overrides(problem.build(full), full)
     if element not in circuit.elements:
         raise ParameterError(f"spread of {name}: no element {element!r}",
-                             hint=S._did_you_mean(element, circuit.elements, "elements"))
+                             hint=name_hint(element, circuit.elements, "elements"))
     spec = circuit.elements[element]
     model = spec.params.get("model")
     value = spec.params.get(param, getattr(model, param, None))
@@ -101,7 +102,7 @@ def nominal(problem, point: dict, name: str) -> float:
         known = [k for k, v in spec.params.items() if isinstance(v, (int, float))] + \
             (list(model.as_dict()) if hasattr(model, "as_dict") else [])
         raise ParameterError(f"spread of {name}: {element} has no parameter {param!r}",
-                             hint=S._did_you_mean(param, known, "parameters"))
+                             hint=name_hint(param, known, "parameters"))
     return float(getattr(value, "level", value))
 
 
@@ -139,7 +140,7 @@ def expand(problem, point: dict, name: str) -> list:
 
 def from_fit(problem, point: dict, element: str, fit) -> Spread:
     """A correlated normal group for the valve ``element`` from a fit: the JSON of
-    ``pneunet fit --json`` (a path or dict) or a :class:`~pneunet.identify.fit.ValveFit`;
+    ``pneunet fit --json`` (a path or dict) or a :class:`~pneunet.truth.valves.identify.fit.ValveFit`;
     centred on the circuit's values, parameters without a variance left out."""
     data = _fit_json(fit)
     params = data.get("params") or {}
@@ -190,7 +191,7 @@ def spread_hint() -> str:
 
 
 def _model_name(model) -> str:
-    from ..valve_params import PAPER_VALVES
+    from ..physics.valve_params import PAPER_VALVES
 
     return next((k for k, v in PAPER_VALVES.items() if v == model), "a .model card")
 

@@ -19,7 +19,7 @@ import math
 import time
 from dataclasses import dataclass
 
-from ..reprs import Summarized
+from ..common.reprs import Summarized
 from .problem import Problem
 from .sensitivity import derivative_effects, most_important, plot_tornado, sensitivities
 from .spec import require_whole
@@ -186,7 +186,7 @@ def yield_analysis(problem: Problem, values: dict, spread, n: int = 1000, seed: 
     require_whole("yield: the number of samples (--yield)", n, 1)
     require_whole("yield: seed", seed, 0)
     if se is not None and not (isinstance(se, (int, float)) and 0 < se < 0.5):
-        from ..errors import ParameterError
+        from ..common.errors import ParameterError
 
         raise ParameterError(f"yield: the standard error asked (--yield-se) must be a "
                              f"fraction between 0 and 0.5, got {se!r}",

@@ -17,8 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import elements
-from ..elements.base import ElementSpec, FamilyContext
+from ..physics import elements
+from ..physics.elements.base import ElementSpec, FamilyContext
 
 
 def _cat(arrays) -> np.ndarray:
@@ -42,7 +42,7 @@ class CircuitDAE:
     """The residual, Jacobian and bookkeeping of one circuit (immutable once built)."""
 
     def __init__(self, circuit, validate: bool = True):
-        from ..gcpause import collector_paused
+        from ..common.gcpause import collector_paused
 
         if validate:  # a part of a validated circuit (a multirate cell) may not stand alone
             circuit.validate()

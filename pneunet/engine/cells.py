@@ -19,8 +19,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..errors import ParameterError
-from ..waveforms import Constant
+from ..common.errors import ParameterError
+from ..physics.waveforms import Constant
 from .assembly import CircuitDAE
 from .circuit import Circuit
 from .partition import time_dependent
@@ -323,6 +323,6 @@ _NO_TIMES = np.full(3, np.nan)  # cells' elements do not depend on time
 
 
 def _placeholder(name, node, ambient):
-    from ..elements.base import ElementSpec
+    from ..physics.elements.base import ElementSpec
 
     return ElementSpec("pressure_source", name, (node,), {"value": Constant(ambient)})

@@ -21,12 +21,12 @@ import os
 import re
 from typing import Any
 
-from .. import elements
-from ..errors import ParameterError, SourceSpan, TopologyError
-from ..elements.base import ElementSpec
+from ..physics import elements
+from ..common.errors import ParameterError, SourceSpan, TopologyError
+from ..physics.elements.base import ElementSpec
 from .options import SimulationOptions
-from ..units import split_quantity, to_internal
-from ..waveforms import Waveform, as_waveform
+from ..physics.units import split_quantity, to_internal
+from ..physics.waveforms import Waveform, as_waveform
 
 REFERENCE_NODES = ("0", "gnd", "atm")
 #: what a netlist word cannot hold (white space, control characters, its punctuation):
@@ -136,7 +136,7 @@ class Circuit:
             if spec.kind == "object":
                 out[key] = value
             elif spec.kind == "table" and isinstance(value, (str, os.PathLike)):
-                from ..tables import read_table
+                from ..physics.tables import read_table
 
                 out[key] = read_table(value, family.table_slots, strict=None,
                                       ambient_kpa=self.options.ambient,
@@ -167,7 +167,7 @@ class Circuit:
 
     # -- convenience constructors (one per built-in family) -------------------------
     def pressure_source(self, name, node, value, **kw):
-        """Absolute pressure (kPa, a :mod:`~pneunet.waveforms` waveform or a function of
+        """Absolute pressure (kPa, a :mod:`~pneunet.physics.waveforms` waveform or a function of
         time t in s returning kPa) at ``node``."""
         return self.add("pressure_source", name, (node,), value=value, **kw)
 
@@ -279,7 +279,7 @@ class Circuit:
 
     def validate(self) -> None:
         """Raise :class:`TopologyError` for a circuit that cannot be simulated."""
-        from ..gcpause import collector_paused
+        from ..common.gcpause import collector_paused
         from .topology import check_topology
 
         with collector_paused():
@@ -296,9 +296,9 @@ class Circuit:
         return "\n".join(lines)
 
     def draw(self, path=None, *, results=None):
-        """The schematic (:func:`pneunet.schematic.draw`), written to ``path`` (.svg, .png,
+        """The schematic (:func:`pneunet.interfaces.schematic.draw`), written to ``path`` (.svg, .png,
         .pdf) if given; ``results``: an operating point or ``(solution, t)`` to annotate."""
-        from ..schematic import draw
+        from ..interfaces.schematic import draw
 
         return draw(self, path, results=results)
 

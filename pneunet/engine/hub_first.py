@@ -10,7 +10,7 @@ only to find that nothing changed.  Instead:
    (t, p, ṗ);
 2. the cubic Hermite through those steps (the single-rate solver's dense output)
    pins each hub node as a pressure source of the cells
-   (:class:`~pneunet.waveforms.SampleTable`), with the hub's corners (where its own
+   (:class:`~pneunet.physics.waveforms.SampleTable`), with the hub's corners (where its own
    inputs kink) as the source's corners;
 3. the cells, no longer coupled at all, are integrated as independent circuits by
    :mod:`~pneunet.engine.multirate`: cells of one structure as arrays, each on its own
@@ -27,9 +27,9 @@ import time as _time
 
 import numpy as np
 
-from ..elements.base import ElementSpec
-from ..errors import SolverError
-from ..waveforms import SampleTable, Sampled
+from ..physics.elements.base import ElementSpec
+from ..common.errors import SolverError
+from ..physics.waveforms import SampleTable, Sampled
 from .assembly import CircuitDAE
 from .circuit import Circuit
 from .multirate import transient as multirate

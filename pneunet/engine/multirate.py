@@ -31,7 +31,7 @@ hub (cells driven by ideal sources only) are independent circuits: each runs
 through the single-rate integrator of its own, with fold jumps.
 
 From :data:`PARALLEL_MIN_BATCHED` batched cells on, the cells are split in two, each
-half built and integrated in a worker process of its own (:class:`~pneunet.workers.Servant`)
+half built and integrated in a worker process of its own (:class:`~pneunet.common.workers.Servant`)
 with the outputs in shared memory; the hub stays in the calling process.
 """
 from __future__ import annotations
@@ -46,9 +46,9 @@ from .partition import Cell, Partition
 from .solution import Solution, build_solution
 from .solvers import radau
 from .solvers.interpolate import hermite_step
-from ..errors import SolverError
-from ..waveforms import SampleTable
-from ..workers import Servant, can_fork, process_pool
+from ..common.errors import SolverError
+from ..physics.waveforms import SampleTable
+from ..common.workers import Servant, can_fork, process_pool
 
 SAMPLES = 8                # hub sample intervals per window: at least,
 MAX_SAMPLES = 64           # at most; else one per step of the hub (once it has taken one)

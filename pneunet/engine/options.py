@@ -4,10 +4,10 @@ from __future__ import annotations
 from dataclasses import dataclass, fields, replace
 from numbers import Real
 
-from ..errors import ParameterError
-from ..gas import AIR, GASES, ROOM_TEMPERATURE_K, STANDARD_ATMOSPHERE_KPA, Gas
-from ..laws import DEFAULT_FLOW_BAND_KPA2
-from ..liquids import LIQUIDS, Liquid
+from ..common.errors import ParameterError
+from ..physics.gas import AIR, GASES, ROOM_TEMPERATURE_K, STANDARD_ATMOSPHERE_KPA, Gas
+from ..physics.laws import DEFAULT_FLOW_BAND_KPA2
+from ..physics.liquids import LIQUIDS, Liquid
 
 
 METHODS = ("auto", "single", "multirate")
@@ -21,10 +21,10 @@ class SimulationOptions:
     ambient             ambient pressure in kPa: reference nodes and gauge units
     temperature         gas temperature in K (isothermal elements)
     gas                 name of the gas ('air', 'nitrogen', or one of ``fluids``), or a
-                        :class:`~pneunet.gas.Gas`
+                        :class:`~pneunet.physics.gas.Gas`
     fluid               'gas' (default: the gas above) or a liquid ('water',
-                        'hydraulic_oil'; see pneunet.liquids; or one of ``fluids``), or a
-                        :class:`~pneunet.liquids.Liquid`
+                        'hydraulic_oil'; see pneunet.physics.liquids; or one of ``fluids``), or a
+                        :class:`~pneunet.physics.liquids.Liquid`
     fluids              the user's own liquids and gases (netlist ``.fluid`` cards): a
                         Gas or Liquid given as ``gas``/``fluid`` is added here, by name
     flow_band           zero-flow regularisation band ε in kPa² (see laws.signed_root)

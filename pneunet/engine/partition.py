@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from .. import elements
+from ..physics import elements
 
 #: an unknown node with at least this many element ports is a hub candidate
 HUB_DEGREE = 16

@@ -12,8 +12,8 @@ import time as _time
 import numpy as np
 
 from .assembly import CircuitDAE, distinct_times
-from .diagnostics import captured
-from ..errors import ParameterError, SolverError
+from ..common.solver_messages import captured
+from ..common.errors import ParameterError, SolverError
 from .solution import OperatingPoint, Solution, build_solution
 from .stability import linear_stability
 from .single_rate import consistent_state, integrate, pseudo_capacitance, residual_and_jacobian
@@ -200,7 +200,7 @@ def _check_corners(circuit, t_start, t_stop, limit) -> None:
     """A ParameterError naming the source whose waveform has more corners in
     (t_start, t_stop) than ``limit`` (each one a stop of the integrator), before any
     is made: PULSE with a 4 ns period over 10^4 s would be 10^13."""
-    from ..waveforms import Waveform
+    from ..physics.waveforms import Waveform
 
     for name, spec in circuit.elements.items():
         for value in spec.params.values():

@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import SolverError
-from ..waveforms import SampleTable
+from ..common.errors import SolverError
+from ..physics.waveforms import SampleTable
 from .solution import build_solution
 from .solvers import available_backends
 from .solvers.base import EVENT, FAILED, Segment
@@ -238,7 +238,7 @@ class _Watch:
 def _progress(enabled, t0, t1):
     if not enabled:
         return None
-    from ..progress import progress_bar
+    from ..common.progress import progress_bar
 
     return progress_bar(total=t1 - t0, unit="s", desc="transient",
                         bar_format="{l_bar}{bar}| {n:.3g}/{total:.3g} s [{elapsed}<{remaining}]")

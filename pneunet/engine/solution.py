@@ -13,8 +13,8 @@ from typing import Any, Callable, Mapping
 
 import numpy as np
 
-from ..errors import PneunetError
-from ..reprs import Summarized, listed, number
+from ..common.errors import PneunetError
+from ..common.reprs import Summarized, listed, number
 
 
 def column_name(signal: str, unit: str) -> str:
@@ -203,8 +203,8 @@ class Solution(Summarized):
 
     def save(self, path, circuit=None):
         """The whole run in one file (``.json`` or ``.npz``) with ``circuit``'s netlist
-        and options; :func:`pneunet.read_run` loads it back (see :mod:`pneunet.runfile`)."""
-        from ..runfile import save_run
+        and options; :func:`pneunet.read_run` loads it back (see :mod:`pneunet.interfaces.runfile`)."""
+        from ..interfaces.runfile import save_run
 
         return save_run(path, self, circuit)
 
@@ -212,7 +212,7 @@ class Solution(Summarized):
         """Pressures (top) and flows (bottom) against time; traces with equal values are
         drawn once (labelled ``a = b``), legends outside the axes.  Saves a PNG when
         ``path`` is given, else returns the figure."""
-        from ..plotting import draw_traces, pyplot, save
+        from ..common.plotting import draw_traces, pyplot, save
 
         names = [self._signal_name(n) for n in signals] if signals else list(self.signals)
         pressures = {n[2:]: self[n] for n in names
@@ -282,7 +282,7 @@ def build_solution(dae, times, states, stats, branch_jumps) -> Solution:
     source flows and element signals when first read (:class:`LazySignals`)."""
     import functools
 
-    from .. import elements
+    from ..physics import elements
 
     states = states.reshape(len(times), dae.n)
     states.setflags(write=False)  # the pressure signals are views of it, handed over uncopied

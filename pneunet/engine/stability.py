@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..reprs import Summarized
+from ..common.reprs import Summarized
 
 #: unknowns above which no eigenvalues are computed (dense QZ costs ~n³: ~0.1 s at 200)
 EIGEN_LIMIT = 200

@@ -1,7 +1,7 @@
 """Graph checks that make a circuit simulable, with errors naming the culprits."""
 from __future__ import annotations
 
-from ..errors import TopologyError
+from ..common.errors import TopologyError
 
 
 def _where(spec) -> str:
@@ -18,7 +18,7 @@ def check_topology(circuit) -> None:
       a volume (their pressures are undetermined);
     * ``.ic`` on a node that does not exist.
     """
-    from .. import elements
+    from ..physics import elements
 
     if not circuit.elements:
         raise TopologyError("the circuit has no elements")
@@ -122,7 +122,7 @@ def dangling_nodes(circuit) -> list[str]:
 def _internal_state(spec, node) -> bool:
     """A node where the element keeps a state of its own (a storage port passing no flow,
     e.g. a hysteretic check valve's open fraction): one connection is all it has."""
-    from .. import elements
+    from ..physics import elements
 
     family = elements.family(spec.kind)
     port = spec.nodes.index(node)

@@ -7,7 +7,9 @@
 
 Pipeline: text --(lark, grammar.lark)--> statements with spans --(elaborate)-->
 :class:`Deck` (a :class:`~pneunet.engine.circuit.Circuit` plus analyses, measurements,
-saves and steps).  :func:`print_circuit` writes a circuit back as netlist text.
+saves and steps).  :func:`print_circuit` writes a circuit back as netlist text;
+:mod:`.builder` makes a circuit at a parameter point.  The language builds circuits for
+the engine, which knows no language.  May import: common, physics, engine.
 """
 from __future__ import annotations
 
@@ -56,7 +58,7 @@ def load_file(path, *, limits=None, include_path=()):
 
 def elaborate_source(source, overrides: dict | None = None) -> Deck:
     """The :class:`Deck` of a :func:`load_file` result with ``.param`` ``overrides``."""
-    from ..gcpause import collector_paused
+    from ..common.gcpause import collector_paused
     from .elaborate import elaborate
 
     with collector_paused():
@@ -74,7 +76,7 @@ def _build(src, path, overrides, limits, include_path) -> Deck:
     from .structure import load
     from .includes import IncludePolicy
 
-    from ..gcpause import collector_paused
+    from ..common.gcpause import collector_paused
 
     policy = IncludePolicy.for_netlist(path, include_path)
     with collector_paused():

@@ -14,7 +14,7 @@ def signal_quantities(spec, options) -> list | None:
     reports for one instance at ambient pressure (None if that cannot be asked)."""
     import numpy as np
 
-    from .. import elements
+    from ..physics import elements
 
     family = elements.family(spec.kind)
     found = ["mdot"] if family.pinned_ports else []   # a source's flow (the solution's)
@@ -70,7 +70,7 @@ class AnalysisStatements:
             raise _err(f".dc sweeps a source; {name!r} is " +
                        ("not a source" if spec else "not defined"), items[0],
                        _close(name, sources) or ("sources: " + ", ".join(sources)))
-        from .. import elements
+        from ..physics import elements
 
         slot = elements.family(spec.kind).params["value"].slot
         values = self._sweep_values(st, items[1:], lambda w: self._number(w, slot, name, self.scope))

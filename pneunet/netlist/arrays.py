@@ -9,7 +9,7 @@ import dataclasses
 import math
 import re
 
-from ..errors import NetlistError
+from ..common.errors import NetlistError
 
 _TAIL = re.compile(r"\[([^\[\]]*)\]$")
 _ANY_RANGE = re.compile(r"\[[^\[\]]*:[^\[\]]*\]")

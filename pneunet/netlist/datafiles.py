@@ -1,7 +1,7 @@
 """Tables in a netlist: inline ``TABLE(x y …)``, or data files (a pressure–volume table,
 a recorded source) found and allowed by the include policy (:mod:`.includes`: relative to
 the naming file, then the search path; never outside those folders) and read by
-:func:`pneunet.tables.read_table`."""
+:func:`pneunet.physics.tables.read_table`."""
 from __future__ import annotations
 
 import os
@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import DataError
+from ..common.errors import DataError
 from .located import error_at as _err
 from .syntax import Pair, RawArgs, Str, Word
 from .values import TINY, split
@@ -53,7 +53,7 @@ def column(args: RawArgs, first: int, slot: str, number, convert) -> list:
 def read_data_file(item, policy, slots, options, label, *, strict):
     """The two columns of the CSV file ``item`` names, in the internal units of ``slots``;
     an error at ``item`` (with the file's line for a problem inside it)."""
-    from ..tables import read_table
+    from ..physics.tables import read_table
 
     if not isinstance(item, (Word, Str)):
         raise _err(f"{label} expects a file name", item, 'e.g. "curve.csv"')

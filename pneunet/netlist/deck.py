@@ -5,8 +5,8 @@ import itertools
 from dataclasses import dataclass, field
 from typing import Any
 
-from ..errors import SourceSpan
-from ..reprs import Summarized
+from ..common.errors import SourceSpan
+from ..common.reprs import Summarized
 
 
 @dataclass
@@ -129,7 +129,7 @@ class Deck(Summarized):
     def validate(self) -> None:
         """``circuit.validate()``; an error about the whole circuit ("no node has a defined
         pressure") is placed in the netlist's file."""
-        from ..errors import PneunetError
+        from ..common.errors import PneunetError
 
         try:
             self.circuit.validate()
@@ -139,9 +139,9 @@ class Deck(Summarized):
             raise type(err)(err.message, where=self.file, hint=err.hint) from None
 
     def draw(self, path=None, *, results=None, expand: bool = False):
-        """The circuit's schematic (:func:`pneunet.schematic.draw`): each subcircuit
+        """The circuit's schematic (:func:`pneunet.interfaces.schematic.draw`): each subcircuit
         instance a box, or its elements with ``expand=True``."""
-        from ..schematic import draw
+        from ..interfaces.schematic import draw
 
         return draw(self.circuit, path, results=results,
                     instances=None if expand else self.instances)

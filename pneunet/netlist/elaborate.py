@@ -12,8 +12,8 @@ import itertools
 import math
 import re
 
-from .. import elements
-from ..errors import NetlistError, PneunetError, SourceSpan
+from ..physics import elements
+from ..common.errors import NetlistError, PneunetError, SourceSpan
 from .analyses import AnalysisStatements
 from . import plausible
 from .arrays import split_range
@@ -440,7 +440,7 @@ class _Builder(ModelCards, AnalysisStatements, MeasureStatements, WaveformCalls)
     def _node_read_as_value(self, family, full, names, extra):
         """``V1 a 0 200kPa``: a reference node where the first value goes, then a value of
         another dimension — the element was taken for one with more nodes."""
-        from ..units import SLOTS, pretty
+        from ..physics.units import SLOTS, pretty
 
         parts = split(extra[1].text) if isinstance(extra[1], Word) else None
         got = dimension_of(parts[1]) if parts and parts[1] else None
@@ -594,6 +594,6 @@ def _fmt_int(value: float) -> str:
 
 
 def _example(slot):
-    from ..units import example
+    from ..physics.units import example
 
     return example(slot)

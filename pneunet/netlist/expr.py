@@ -16,7 +16,7 @@ import dataclasses
 import functools
 import math
 
-from ..errors import NetlistError, SourceSpan
+from ..common.errors import NetlistError, SourceSpan
 from .values import number_in_expression, split
 
 

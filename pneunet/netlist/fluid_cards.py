@@ -12,9 +12,9 @@ Keys are case-insensitive; bare numbers are in kg/m³, Pa·s, kPa, g/mol and K.
 """
 from __future__ import annotations
 
-from ..errors import PneunetError
-from ..gas import GASES, Gas
-from ..liquids import LIQUIDS, Liquid
+from ..common.errors import PneunetError
+from ..physics.gas import GASES, Gas
+from ..physics.liquids import LIQUIDS, Liquid
 from .located import error_at as _err
 from .syntax import Pair, Word
 

@@ -14,7 +14,7 @@ import stat
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..errors import NetlistError
+from ..common.errors import NetlistError
 from .limits import DEFAULT, Limits
 from .syntax import SourceText, Str, Word, read_source
 

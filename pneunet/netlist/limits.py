@@ -6,7 +6,7 @@ import dataclasses
 import difflib
 from dataclasses import dataclass
 
-from ..errors import ParameterError
+from ..common.errors import ParameterError
 
 
 #: the most a limit can be raised to: nesting that is read by recursion

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import difflib
 
-from ..errors import NetlistError, SourceSpan
+from ..common.errors import NetlistError, SourceSpan
 
 
 def error_at(msg, item_or_span, hint=None):

@@ -1,7 +1,7 @@
 """``.model`` cards and model names: the valve-card part of the elaboration."""
 from __future__ import annotations
 
-from ..errors import PneunetError
+from ..common.errors import PneunetError
 from .located import did_you_mean as _close, error_at as _err
 from .syntax import Call, Pair, Word
 
@@ -33,7 +33,7 @@ class ModelCards:
         self.model_spans[key] = st.span
 
     def _lookup_model(self, word: Word):
-        from ..valve_params import PAPER_VALVES
+        from ..physics.valve_params import PAPER_VALVES
 
         key = word.text.lower()
         if key in self.models:
@@ -45,7 +45,7 @@ class ModelCards:
                    _close(key, known) or "known: " + ", ".join(known))
 
     def _valve_card(self, card: Call, scope, name):
-        from ..valve_params import ValveParams
+        from ..physics.valve_params import ValveParams
 
         values, extra, base = {}, {}, None
         canon = {k.lower(): k for k in VALVE_CARD}
@@ -83,10 +83,10 @@ class ModelCards:
         if not extra:
             return params
         try:
-            from ..effects import ValveModel
+            from ..physics.valve_effects import ValveModel
         except ImportError:
             raise _err(f"valve model {name}: effect parameters ({', '.join(extra)}) need "
-                       "pneunet.effects.ValveModel, which this installation lacks", card) from None
+                       "pneunet.physics.valve_effects.ValveModel, which this installation lacks", card) from None
         try:
             return ValveModel.from_card_params({**values, **extra})
         except PneunetError as err:

@@ -1,14 +1,14 @@
 """Values that are allowed but not what was meant: a bare number far outside a parameter's
 usual range (``theta0=0.35`` is 0.35°, ``mass=200`` is 200 kg, a tube ``length=3`` is 3 mm)
 and any value outside the range its law makes sense in (``length=3M`` is 3 µm: ``M`` is
-SPICE milli).  Each is a located :class:`~pneunet.errors.InputWarning` naming how the value
+SPICE milli).  Each is a located :class:`~pneunet.common.errors.InputWarning` naming how the value
 was read and, for a bare number, the units that would put it in range.
 """
 from __future__ import annotations
 
 import warnings
 
-from ..errors import InputWarning
+from ..common.errors import InputWarning
 from .values import split
 
 #: units a bare number may have been meant in, per slot (tried for the hint)
@@ -22,7 +22,7 @@ ALTERNATIVES = {
 def check(param, key: str, value: float, text: str, span, label: str) -> None:
     """Warn (once per call) when ``value`` of ``param`` (read from ``text``) lies outside
     its usual range as a bare number, or outside its plausible range at all."""
-    from ..units import GAUGE_UNITS, SLOTS, pretty, to_internal
+    from ..physics.units import GAUGE_UNITS, SLOTS, pretty, to_internal
 
     if param.typical is None or value == 0 and param.default == 0:
         return  # zero: "none" (no spring, no mass)
@@ -59,7 +59,7 @@ def check(param, key: str, value: float, text: str, span, label: str) -> None:
 
 
 def _options():
-    from ..elements.base import Param
+    from ..physics.elements.base import Param
 
     return {"temperature": Param("temperature", "gas temperature, K", typical=(200.0, 400.0),
                                  plausible=(150.0, 1000.0)),
@@ -77,7 +77,7 @@ def check_option(key: str, value: float, word) -> None:
 def check_level(value: float, word, label: str) -> None:
     """Warn about a pressure source's waveform level far from the usual (``PULSE(0 200)``:
     0 kPa absolute is a vacuum)."""
-    from .. import elements
+    from ..physics import elements
 
     if isinstance(getattr(word, "text", None), str):
         check(elements.family("pressure_source").params["value"], label, value, word.text,

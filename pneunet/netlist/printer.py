@@ -9,11 +9,11 @@ from __future__ import annotations
 import math
 from dataclasses import fields
 
-from .. import elements
-from ..errors import printable
+from ..physics import elements
+from ..common.errors import printable
 from ..engine.options import SimulationOptions
-from ..valve_params import PAPER_VALVES, ValveParams
-from ..waveforms import Waveform
+from ..physics.valve_params import PAPER_VALVES, ValveParams
+from ..physics.waveforms import Waveform
 
 _PREFERRED = ("axi_0p6mm", "mirror", "mirror_backward")
 
@@ -35,7 +35,7 @@ def _same(a, b) -> bool:
 
 
 def waveform_text(w: Waveform) -> str:
-    from .. import waveforms as wf
+    from ..physics import waveforms as wf
 
     if isinstance(w, wf.Constant):
         return _num(w.level)
@@ -103,7 +103,7 @@ def print_circuit(circuit, *, header: bool = True) -> str:
         elif hasattr(model, "card_params"):
             params = model.card_params()
         else:
-            from ..errors import NetlistError
+            from ..common.errors import NetlistError
 
             raise NetlistError(f"cannot write valve model {model!r} as a .model card")
         cards.append(f".model {name} VALVE(" + " ".join(f"{k}={_num(v)}" for k, v in params.items()) + ")")

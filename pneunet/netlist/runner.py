@@ -6,9 +6,9 @@ from typing import Any
 
 import numpy as np
 
-from .. import measure as M
-from ..errors import PneunetError
-from ..units import SLOTS
+from ..engine import measure as M
+from ..common.errors import PneunetError
+from ..physics.units import SLOTS
 from .deck import DC, Deck, Measure, Op, Tran
 from .measures import SIGNAL_SLOTS
 
@@ -76,9 +76,9 @@ def run_analysis(deck: Deck, analysis, progress=False):
 
 
 def check_finite(table: dict, analysis: str) -> None:
-    """A result holding NaN or inf is a :class:`~pneunet.errors.SolverError` naming the
+    """A result holding NaN or inf is a :class:`~pneunet.common.errors.SolverError` naming the
     signal and the time (or sweep value) — never a result written with exit code 0."""
-    from ..errors import SolverError
+    from ..common.errors import SolverError
 
     if "signal" in table and "value" in table:  # an operating point: one row per signal
         x_name, x = None, None
@@ -100,8 +100,8 @@ def check_finite(table: dict, analysis: str) -> None:
 
 
 def _dc(circuit, analysis: DC) -> DCResult:
-    from .. import elements
-    from ..waveforms import Constant
+    from ..physics import elements
+    from ..physics.waveforms import Constant
 
     spec = circuit.elements[analysis.source]
     saved = spec.params["value"]

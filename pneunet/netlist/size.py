@@ -4,7 +4,7 @@ seconds of elaboration.  A count that needs parameter values (a range with ``{}`
 taken as one copy, so the count never exceeds what elaboration makes."""
 from __future__ import annotations
 
-from ..errors import NetlistError
+from ..common.errors import NetlistError
 from .arrays import split_range
 from .syntax import Pair, Word
 

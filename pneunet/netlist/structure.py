@@ -4,7 +4,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..errors import SourceSpan
+from ..common.errors import SourceSpan
 from .includes import IncludePolicy, expand
 from .limits import DEFAULT as DEFAULT_LIMITS, Limits
 from .located import error_at as _err

@@ -18,7 +18,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..errors import NetlistError, SourceSpan
+from ..common.errors import NetlistError, SourceSpan
 
 
 # -- items ---------------------------------------------------------------------------

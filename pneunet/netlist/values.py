@@ -22,7 +22,7 @@ import re
 
 import numpy as np
 
-from ..errors import NetlistError, ParameterError, SourceSpan
+from ..common.errors import NetlistError, ParameterError, SourceSpan
 
 SCALE = {"f": 1e-15, "p": 1e-12, "n": 1e-9, "u": 1e-6, "µ": 1e-6, "m": 1e-3, "k": 1e3,
          "meg": 1e6, "g": 1e9, "t": 1e12}
@@ -60,7 +60,7 @@ def _unit_dimension_matches(unit: str, slot: str) -> bool:
     Common units and the scale-factor letters are decided without pint (the
     tests check both tables against pint); anything else asks pint.
     """
-    from ..units import FAST_FACTORS
+    from ..physics.units import FAST_FACTORS
 
     if not plausible_unit(unit):
         return False
@@ -73,7 +73,7 @@ def _unit_dimension_matches(unit: str, slot: str) -> bool:
 
 def pint_dimension_matches(unit: str, slot: str) -> bool:
     """What pint says: is ``unit`` a unit whose dimension fits ``slot``?"""
-    from ..units import SLOTS, pint_unit, registry
+    from ..physics.units import SLOTS, pint_unit, registry
 
     try:
         ureg = registry()
@@ -89,7 +89,7 @@ def pint_dimension_matches(unit: str, slot: str) -> bool:
 
 def convert(text: str, slot: str, span: SourceSpan, *, name: str, ambient: float, gas) -> float:
     """Convert a literal like ``496kPa``, ``2k`` or ``0.566`` for ``slot``."""
-    from ..units import example
+    from ..physics.units import example
 
     parts = split(text)
     if parts is None:
@@ -102,7 +102,7 @@ def convert_magnitude(magnitude, suffix: str, slot: str, span: SourceSpan, *, na
                       ambient: float, gas):
     """:func:`convert` of a number already split from its unit ``suffix``; ``magnitude``
     may be an array (a TABLE column: one conversion for all its values)."""
-    from ..units import GAUGE_UNITS, SLOTS, example, pretty, to_internal
+    from ..physics.units import GAUGE_UNITS, SLOTS, example, pretty, to_internal
 
     if not suffix:
         return magnitude
@@ -143,7 +143,7 @@ def number_in_expression(text: str, span: SourceSpan, ambient: float = 101.325) 
         if suffix in ("g", "t", "N"):
             _ambiguous_scale(text, suffix, span)
         return magnitude * SCALE[suffix.lower()]
-    from ..units import GAUGE_UNITS, to_internal
+    from ..physics.units import GAUGE_UNITS, to_internal
 
     gauge = suffix in GAUGE_UNITS
     unit = suffix[:-1] if gauge else suffix
@@ -167,7 +167,7 @@ def _ambiguous_scale(text, suffix, span) -> None:
     nano (no pneumatic quantity is that large or small), not gram, tonne, newton."""
     import warnings
 
-    from ..errors import InputWarning
+    from ..common.errors import InputWarning
 
     unit = {"g": "gram", "t": "tonne", "N": "newton"}[suffix]
     warnings.warn(InputWarning(
@@ -216,7 +216,7 @@ def check_number(value: float, text: str, span: SourceSpan, name: str = "",
 
 def dimension_of(unit: str) -> str | None:
     """The slot whose dimension ``unit`` has (``'kPa'`` -> ``'pressure'``), or None."""
-    from ..units import GAUGE_UNITS
+    from ..physics.units import GAUGE_UNITS
 
     unit = unit[:-1] if unit in GAUGE_UNITS else unit
     return next((slot for slot in _DIMENSION_ORDER if _unit_dimension_matches(unit, slot)), None)

@@ -2,7 +2,7 @@
 waveform part of the elaboration."""
 from __future__ import annotations
 
-from ..errors import PneunetError
+from ..common.errors import PneunetError
 from . import plausible
 from .datafiles import column, read_data_file
 from .located import did_you_mean as _close, error_at as _err
@@ -20,7 +20,7 @@ class WaveformCalls:
         return value
 
     def _waveform(self, call: Call, slot, scope, label):
-        from .. import waveforms as wf
+        from ..physics import waveforms as wf
 
         kind = call.name.upper()
         diff = "pressure_difference" if slot == "pressure" else slot

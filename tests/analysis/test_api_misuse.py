@@ -3,9 +3,10 @@ from pathlib import Path
 
 import pytest
 
-from pneunet.analysis.logic import truth_table
-from pneunet.analysis.sweep import NetlistBuilder, run_sweep
-from pneunet.errors import PneunetError
+from pneunet.design.logic import truth_table
+from pneunet.netlist.builder import NetlistBuilder
+from pneunet.design.sweep import run_sweep
+from pneunet.common.errors import PneunetError
 from pneunet.netlist import parse_file
 
 INVERTER = Path(__file__).parents[2] / "netlists" / "inverter.pn"
@@ -40,8 +41,8 @@ def test_truth_table_repr_names_inputs_outputs_and_margin():
 
 
 def test_oscillation_calls_given_the_wrong_object_say_which_call_fits():
-    from pneunet.analysis.oscillation import analyze_oscillation, oscillator_period
-    from pneunet.paper_circuits import oscillator
+    from pneunet.engine.oscillation import analyze_oscillation, oscillator_period
+    from pneunet.design.paper_circuits import oscillator
 
     sol = oscillator().tran("2s", t_step="50ms")  # times may carry units
     assert sol.t[-1] == 2.0 and sol.t[1] == pytest.approx(0.05)
@@ -54,7 +55,7 @@ def test_oscillation_calls_given_the_wrong_object_say_which_call_fits():
 
 @pytest.mark.parametrize("points", [{"Rout": 1.0}, "Rout=1"], ids=["dict", "str"])
 def test_run_sweep_wants_a_list_of_points(points):
-    from pneunet.analysis.circuits import oscillator as build
+    from pneunet.design.circuits import oscillator as build
 
     with pytest.raises(PneunetError, match="takes a list of points") as e:
         run_sweep(build, points, workers=1, progress=False)
@@ -62,26 +63,26 @@ def test_run_sweep_wants_a_list_of_points(points):
 
 
 def test_run_sweep_given_an_axis_says_to_wrap_it_in_a_grid():
-    from pneunet.analysis.circuits import oscillator as build
-    from pneunet.analysis.sweep import lin
+    from pneunet.design.circuits import oscillator as build
+    from pneunet.design.sweep import lin
 
     with pytest.raises(PneunetError, match="got Axis"):
         run_sweep(build, lin("Rout", 0.0, 1.0, 2), workers=1, progress=False)
 
 
 def test_a_time_that_is_no_time_is_a_parameter_error():
-    from pneunet.errors import ParameterError
-    from pneunet.paper_circuits import oscillator
+    from pneunet.common.errors import ParameterError
+    from pneunet.design.paper_circuits import oscillator
 
     with pytest.raises(ParameterError, match="t_stop"):
         oscillator().tran("30kPa")
 
 
 def test_data_calls_given_a_solution_or_a_circuit():
-    from pneunet.analysis.circuits import oscillator as build
-    from pneunet.diagnose import diagnose
-    from pneunet.errors import DataError
-    from pneunet.traces import diagnose_trace, fit_trace, read_trace
+    from pneunet.design.circuits import oscillator as build
+    from pneunet.truth.valves.diagnose import diagnose
+    from pneunet.common.errors import DataError
+    from pneunet.truth.circuits import diagnose_trace, fit_trace, read_trace
 
     sol = build().tran(3.0, t_step=0.05)
     recording = read_trace(sol)  # a simulation stands in for a recording
@@ -94,7 +95,7 @@ def test_data_calls_given_a_solution_or_a_circuit():
 
 
 def test_solution_plot_takes_bare_names_and_names_a_misspelt_one():
-    from pneunet.paper_circuits import oscillator
+    from pneunet.design.paper_circuits import oscillator
 
     sol = oscillator().tran(1.0)
     fig = sol.plot(signals=["tank", "Rvent"])

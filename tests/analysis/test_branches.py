@@ -1,7 +1,7 @@
 import pytest
 
-from pneunet.analysis.branches import (OscillatorSpec, closure_pressure, plot_branches,
-                                       spec_from_circuit, stationary_branches)
+from pneunet.physics.oscillator_branches import (OscillatorSpec, closure_pressure, plot_branches,
+                                                 spec_from_circuit, stationary_branches)
 
 
 def test_turning_points_match_the_simulated_limit_cycle(paper_cycle):
@@ -18,7 +18,7 @@ def test_turning_points_match_the_simulated_limit_cycle(paper_cycle):
 
 
 def test_rout_zero_equilibrium_matches_the_operating_point():
-    from pneunet.analysis.circuits import oscillator
+    from pneunet.design.circuits import oscillator
 
     b = stationary_branches(OscillatorSpec(Rout=0.0))
     assert b.regime == "equilibrium" and not b.turning_points
@@ -30,7 +30,7 @@ def test_rout_zero_equilibrium_matches_the_operating_point():
 
 
 def test_closed_branch_and_curve_solve_eq_28():
-    from pneunet.analysis.branches import _Curve
+    from pneunet.physics.oscillator_branches import _Curve
 
     spec = OscillatorSpec()
     b = stationary_branches(spec)
@@ -57,9 +57,9 @@ def test_oscillator_recognised_with_an_energy_balance_in_its_tank():
     """With the tank's energy balance (a thermal_chamber fed through one thermal_inlet
     per line) the circuit is still the oscillator: same R_out, R_vent, V, so a trace fit
     of that model starts from the branches like the isothermal one."""
-    from pneunet.analysis.branches import spec_from_circuit
-    from pneunet.analysis.circuits import oscillator
-    from pneunet.traces.effects import candidates_for
+    from pneunet.physics.oscillator_branches import spec_from_circuit
+    from pneunet.design.circuits import oscillator
+    from pneunet.truth.circuits.effects import candidates_for
 
     c = oscillator({"V": 50.0, "Rout": 1.3, "Rvent": 4.0})
     heat = next(e for e in candidates_for(c) if e.name == "volume_heat_transfer")

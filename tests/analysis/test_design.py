@@ -1,6 +1,6 @@
 import pytest
 
-from pneunet.analysis import design
+from pneunet.design import sizing as design
 
 
 def test_paper_fill_time_analytic_and_simulated():

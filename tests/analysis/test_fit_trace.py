@@ -1,9 +1,9 @@
 import numpy as np
 import pytest
 
-from pneunet.analysis.circuits import oscillator
-from pneunet.traces import fit_trace, read_trace, split_by_cycles, synthetic_trace
-from pneunet.errors import DataError
+from pneunet.design.circuits import oscillator
+from pneunet.truth.circuits import fit_trace, read_trace, split_by_cycles, synthetic_trace
+from pneunet.common.errors import DataError
 
 TRUE = {"Rout": 1.132, "Rvent": 3.0, "V": 50.0}
 
@@ -36,8 +36,8 @@ def test_recovers_rout_rvent_and_v_inside_their_intervals(trace):
 
 def test_cycle_start_needs_no_fit():
     # the branch turning points and quadrature give R_out and R_vent within a few per cent
-    from pneunet.traces import FIT_OPTIONS, TraceModel
-    from pneunet.traces.start import initial_values
+    from pneunet.truth.circuits import FIT_OPTIONS, TraceModel
+    from pneunet.truth.circuits.start import initial_values
 
     tr = synthetic_trace(oscillator, TRUE, 5.0, dt=0.05, noise=0.5, seed=2, signals=("p_tank",))
     t, y = tr["time_s"].to_numpy(), tr["p_tank_kPa"].to_numpy()

@@ -1,8 +1,8 @@
 from pathlib import Path
 
-from pneunet.analysis.circuits import inverter, nor_gate
-from pneunet.analysis.logic import truth_table
-from pneunet.analysis.sweep import NetlistBuilder
+from pneunet.design.circuits import inverter, nor_gate
+from pneunet.design.logic import truth_table
+from pneunet.netlist.builder import NetlistBuilder
 
 ROOT = Path(__file__).resolve().parents[2]
 

@@ -1,6 +1,6 @@
 import numpy as np
 
-from pneunet.analysis.oscillation import analyze_oscillation, classify
+from pneunet.engine.oscillation import analyze_oscillation, classify
 
 
 def test_sustained_square_like_wave():
@@ -36,8 +36,8 @@ def test_oscillator_period_matches_the_verified_cycle(paper_cycle):
 
 
 def test_oscillator_period_reports_an_equilibrium():
-    from pneunet.analysis.circuits import oscillator
-    from pneunet.analysis.oscillation import oscillator_period
+    from pneunet.design.circuits import oscillator
+    from pneunet.engine.oscillation import oscillator_period
 
     res = oscillator_period(oscillator({"Rout": 0}), "tank")
     assert res.oscillation.kind == "equilibrium"
@@ -48,7 +48,7 @@ def test_crossings_with_a_band_count_one_rise_per_cycle_on_a_noisy_record():
     """Noise riding on a slope near the level: without hysteresis it adds rises on the
     falling edges; with a band of 4 σ only the true cycle starts remain, each within a
     sample of the noise-free crossing (t = 10 k s for this sine)."""
-    from pneunet.analysis.oscillation import rising_crossings
+    from pneunet.engine.oscillation import rising_crossings
 
     t = np.linspace(0.0, 41.0, 4101)
     noise = 0.05 * np.random.default_rng(7).standard_normal(t.size)

@@ -9,8 +9,8 @@ from scipy.integrate import solve_ivp
 from scipy.sparse import diags
 
 from pneunet import ParameterError
-from pneunet.analysis.piping import (PipingSpec, Tubing, build, cross_section, piping_study,
-                                     plot_piping, with_sizes)
+from pneunet.design.piping import (PipingSpec, Tubing, build, cross_section, piping_study,
+                                   plot_piping, with_sizes)
 
 from reference_lines import R_AIR, T, line_flow  # tests/ is on pytest's sys.path
 
@@ -115,7 +115,7 @@ def test_bad_input_is_named(make, message):
 def test_command_line_prints_the_table_and_json(tmp_path, capsys):
     import json
 
-    from pneunet.cli import main
+    from pneunet.interfaces.cli import main
 
     assert main(["piping", "-n", "2", "--length", "0.5m", "--designs",
                  "individual,supply+control", "--plot", str(tmp_path / "p.png")]) == 0
@@ -136,7 +136,7 @@ def test_a_longer_control_line_delays_and_smooths_the_valve():
     """The control pressure at the valve falls later and more slowly on a longer line, and
     the axi valve opens only once it is below a_in·p_in + a_out·p_out − p_close
     = 0.32·496 + 0.71·96 − 96.42 = 130.4 kPa (eq. 25, actuator still at ambient)."""
-    from pneunet.analysis.piping import control_line_delays
+    from pneunet.design.piping import control_line_delays
 
     result = control_line_delays(PipingSpec(t_stop=3.0), lengths=(500.0, 2000.0))
     short, long_ = result.table.loc[500.0], result.table.loc[2000.0]

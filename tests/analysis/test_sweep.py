@@ -2,8 +2,8 @@
 import numpy as np
 import pytest
 
-from pneunet.analysis import sweep as S
-from pneunet.analysis.circuits import oscillator
+from pneunet.design import sweep as S
+from pneunet.design.circuits import oscillator
 
 FAST = S.OscillationMeasure(t_stop=6.0)  # V = 50 mL: period ≈ 1.5 s
 
@@ -53,7 +53,7 @@ def test_local_pool_and_dask_give_identical_tables(tmp_path):
     """A dask cluster's sweep equals the local one point for point; its points go in
     batches (fewer tasks than points) and every point reaches the store."""
     distributed = pytest.importorskip("distributed")
-    from pneunet.analysis.sweep_dask import batch_sizes
+    from pneunet.design.sweep_dask import batch_sizes
 
     pts = small_grid(3)
     local = S.run_sweep(oscillator, pts, FAST, workers=2, progress=False)
@@ -77,7 +77,7 @@ def test_local_pool_and_dask_give_identical_tables(tmp_path):
 
 
 def test_dask_batches_shrink_towards_the_end():
-    from pneunet.analysis.sweep_dask import batch_sizes
+    from pneunet.design.sweep_dask import batch_sizes
 
     for n, threads in [(144, 2), (9, 2), (1, 4), (1000, 8)]:
         sizes = batch_sizes(n, threads)

@@ -12,9 +12,9 @@ import time
 
 import pytest
 
-from pneunet.analysis import sweep as S
-from pneunet.analysis.circuits import oscillator
-from pneunet.cli import main
+from pneunet.design import sweep as S
+from pneunet.design.circuits import oscillator
+from pneunet.interfaces.cli import main
 
 pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
 
@@ -23,8 +23,8 @@ FAST = S.OscillationMeasure(t_stop=3.0)
 # two pool workers, each point held 0.15 s so that a kill lands while points are running
 SCRIPT = textwrap.dedent("""
     import sys, time
-    from pneunet.analysis import sweep as S
-    from pneunet.analysis.circuits import oscillator
+    from pneunet.design import sweep as S
+    from pneunet.design.circuits import oscillator
 
     class Slow(S.OscillationMeasure):
         def __call__(self, circuit):

@@ -2,8 +2,8 @@
 import numpy as np
 import pandas as pd
 
-from pneunet.analysis.sweep import lin
-from pneunet.analysis.sweep_plot import plot_sweep
+from pneunet.design.sweep import lin
+from pneunet.design.sweep_plot import plot_sweep
 
 
 def test_swept_values_are_rounded():

@@ -18,6 +18,6 @@ def cycle_periods(solution, node="tank", settle=10.0):
 @pytest.fixture(scope="session")
 def oscillator_run():
     """The R_out = 2 R_f oscillator simulated once for 30 s (explicit jumps)."""
-    from pneunet.paper_circuits import oscillator
+    from pneunet.design.paper_circuits import oscillator
 
     return oscillator().tran(30.0)

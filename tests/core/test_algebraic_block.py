@@ -4,7 +4,7 @@ import pytest
 
 from pneunet import Circuit
 from pneunet.engine.assembly import AlgebraicBlock, CircuitDAE
-from pneunet.valve_params import PAPER_VALVES
+from pneunet.physics.valve_params import PAPER_VALVES
 
 
 def _ladder(cells=6):

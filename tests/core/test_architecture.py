@@ -44,11 +44,11 @@ def test_plain_run_imports_only_what_it_needs(tmp_path):
     or matplotlib (their imports would cost more than a small transient), nor the other
     sub-commands' modules (the fitting's CSV reader, the design code)."""
     netlist = PACKAGE.parent / "netlists" / "oscillator.pn"
-    code = ("import sys; from pneunet.cli import main; "
+    code = ("import sys; from pneunet.interfaces.cli import main; "
             f"status = main(['run', {str(netlist)!r}, '-q', '-o', {str(tmp_path)!r}]); "
             "print(status, 'sksundae.ida' in sys.modules, [m for m in ('pandas', 'networkx', "
-            "'scipy.optimize', 'matplotlib', 'pneunet.cli.fit', 'pneunet.cli.design', "
-            "'pneunet.cli.fit_trace', 'pneunet.csvdata') if m in sys.modules])")
+            "'scipy.optimize', 'matplotlib', 'pneunet.interfaces.cli.fit', 'pneunet.interfaces.cli.design', "
+            "'pneunet.interfaces.cli.fit_trace', 'pneunet.common.csvdata') if m in sys.modules])")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "0 True []"
     header = (tmp_path / "tran.csv").read_text().splitlines()[0]

@@ -9,8 +9,8 @@ import pytest
 
 from pneunet import Circuit
 from pneunet.engine.assembly import AlgebraicBlock, CircuitDAE, distinct_times
-from pneunet.gas import AIR, GAS_CONSTANT
-from pneunet.waveforms import Step
+from pneunet.physics.gas import AIR, GAS_CONSTANT
+from pneunet.physics.waveforms import Step
 
 AMB, BAND, T_K = 96.0, 10.0, 293.15
 R1, R2, R3, R4 = 1.0, 2.0, 1.5, 0.7
@@ -208,7 +208,7 @@ def test_algebraic_block_with_one_fixed_node_and_other_families_first():
 def test_a_row_without_any_slope_is_scaled_by_the_floor():
     """b between two valves held closed: every partial of its equation is zero; its scale
     is the 1e-300 floor, never 0 (the fold indicator divides by it)."""
-    from pneunet.valve_params import PAPER_VALVES
+    from pneunet.physics.valve_params import PAPER_VALVES
 
     c = Circuit("closed", ambient=AMB)
     c.pressure_source("P1", "s", 200.0)
@@ -307,7 +307,7 @@ def test_consistent_rates_solve_a_coupled_mass_matrix():
                                       (260.0, 130.0)])
 def test_consistent_rates_of_a_thermal_volume_whichever_way_its_gas_flows(p, theta):
     """derivative() against the thermal volume's equations solved by hand (docstring of
-    elements/thermal.py): the resistor's inflow q fixes s = γ·q·T_up/T_w (T_up = T_w
+    physics/elements/thermal.py): the resistor's inflow q fixes s = γ·q·T_up/T_w (T_up = T_w
     entering, T leaving), then ṗ = (s + H)/C and θ̇ from the mass balance.  At ẏ = 0 the
     branch of s is that of −H; at (180, 120) (gas below p_ref, filling) and (260, 200)
     (above, emptying) it is not the solution's: one linear solve left −34.7 mg/s."""

@@ -10,10 +10,10 @@ from scipy.integrate import solve_ivp
 from scipy.interpolate import PchipInterpolator
 
 from pneunet import Circuit, ParameterError
-from pneunet.errors import NetlistError
-from pneunet.gas import AIR, GAS_CONSTANT
+from pneunet.common.errors import NetlistError
+from pneunet.physics.gas import AIR, GAS_CONSTANT
 from pneunet.netlist import parse_netlist
-from pneunet.waveforms import PiecewiseLinear
+from pneunet.physics.waveforms import PiecewiseLinear
 
 AMB, T, R = 101.325, 293.15, 0.5  # kPa, K, kPa·s/mg
 RHO1 = AIR.molar_mass_g_mol / (GAS_CONSTANT * T)  # mg/(mL·kPa)

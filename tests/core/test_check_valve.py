@@ -7,9 +7,9 @@ import pytest
 from scipy.optimize import brentq
 
 from pneunet import Circuit, ParameterError
-from pneunet.errors import PneunetError
+from pneunet.common.errors import PneunetError
 from pneunet.netlist import parse_netlist
-from pneunet.waveforms import PiecewiseLinear
+from pneunet.physics.waveforms import PiecewiseLinear
 
 AMBIENT, R, PCRACK, WIDTH, RLEAK, R_LOAD = 100.0, 0.5, 30.0, 8.0, 400.0, 0.5
 

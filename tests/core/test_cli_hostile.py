@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from pneunet.cli import main
+from pneunet.interfaces.cli import main
 
 ROOT = Path(__file__).parents[2]
 OSC = str(ROOT / "netlists" / "oscillator_design.pn")

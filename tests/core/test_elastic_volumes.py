@@ -5,8 +5,8 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from pneunet import Circuit, ParameterError
-from pneunet.errors import PneunetError
-from pneunet.gas import AIR, GAS_CONSTANT
+from pneunet.common.errors import PneunetError
+from pneunet.physics.gas import AIR, GAS_CONSTANT
 from pneunet.netlist import parse_file
 
 AMBIENT, SUPPLY, R, V0, K, PREF, T = 100.0, 300.0, 2.0, 20.0, 0.08, 100.0, 293.15

@@ -12,8 +12,8 @@ import pytest
 
 from pneunet import Circuit, ParameterError
 from pneunet.engine.assembly import CircuitDAE
-from pneunet.elements import known_kinds
-from pneunet.waveforms import Step
+from pneunet.physics.elements import known_kinds
+from pneunet.physics.waveforms import Step
 
 
 def _pressure_source():
@@ -296,7 +296,7 @@ def test_trivial_circuit_reaches_its_steady_state(kind):
     if expected is None:  # valve: steady state from the paper's law written in the test
         from scipy.optimize import brentq
 
-        from pneunet.valve_params import PAPER_VALVES
+        from pneunet.physics.valve_params import PAPER_VALVES
         from reference_valve import flow  # tests/ is on pytest's sys.path
 
         axi = PAPER_VALVES["axi"].as_dict()
@@ -317,7 +317,7 @@ def test_trivial_circuit_reaches_its_steady_state(kind):
 def test_invalid_parameter_names_the_element(kind):
     _, _, bad = CASES[kind]()
     bad = dict(bad)
-    from pneunet.elements import family
+    from pneunet.physics.elements import family
 
     c = Circuit(fluid="gas" if "gas" in family(bad["kind"]).fluids else "water")
     with pytest.raises(ParameterError) as err:

@@ -9,10 +9,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pneunet.elements.sources import _WaveformBank
+from pneunet.physics.elements.sources import _WaveformBank
 from pneunet.engine.partition import partition
 from pneunet.netlist import parse_netlist
-from pneunet.waveforms import Pulse, SampleTable, Sampled
+from pneunet.physics.waveforms import Pulse, SampleTable, Sampled
 
 CELLS = 20
 
@@ -137,7 +137,7 @@ def test_a_failing_cell_keeps_every_row_all_cells_reached(monkeypatch):
     """A solver failure mid-run returns the rows up to where every cell got, hub
     columns included, equal to those of a run that does not fail."""
     from pneunet.engine.solvers import radau
-    from pneunet.errors import SolverError
+    from pneunet.common.errors import SolverError
 
     full = address_network().tran(3.0, t_step=0.01)
     check, passes = radau._check_step, [0]

@@ -9,9 +9,9 @@ import itertools
 import numpy as np
 import pytest
 
-from pneunet.laws import (Scalar, quadrature_flow, signed_root, valve_conductance,
-                          valve_flow_and_partials)
-from pneunet.valve_params import PAPER_VALVES
+from pneunet.physics.laws import (Scalar, quadrature_flow, signed_root, valve_conductance,
+                                  valve_flow_and_partials)
+from pneunet.physics.valve_params import PAPER_VALVES
 import reference_valve as ref  # tests/ is on pytest's sys.path
 
 BAND = 10.0  # kPa², the circuits' default flow band
@@ -115,7 +115,7 @@ def test_valve_conductance_and_its_slope_by_default():
 def test_no_pressure_difference_no_flow_with_the_exact_root():
     """Identification's exact law (band 0) at p_in = p_out: zero flow, not 0/0; the exact
     root's slope there is infinite (dṁ/dp of √)."""
-    from pneunet.laws import valve_flow
+    from pneunet.physics.laws import valve_flow
 
     axi = PAPER_VALVES["axi"].as_dict()
     assert valve_flow(300.0, 300.0, 96.0, **axi) == 0.0  # open: Δp = 213 kPa

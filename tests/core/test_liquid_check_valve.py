@@ -11,7 +11,7 @@ from scipy.optimize import brentq
 
 from pneunet import Circuit
 from pneunet.netlist import parse_netlist
-from pneunet.waveforms import PiecewiseLinear
+from pneunet.physics.waveforms import PiecewiseLinear
 
 RHO, MU, K = 998.2, 1.002e-3, 2.18e6  # pneunet's water
 AMB = 100.0
@@ -68,7 +68,7 @@ def test_orifice_k_factor_is_fonsims_flow_restrictor():
     mdot = deck.circuit.op(stability=False).flows["O1"] * 1e-6  # kg/s
     d, dp = 2e-3, 50e3
     assert 8 * 0.6 * mdot ** 2 / (math.pi ** 2 * RHO * d ** 4) == pytest.approx(dp, rel=1e-6)
-    from pneunet.errors import NetlistError
+    from pneunet.common.errors import NetlistError
     with pytest.raises(NetlistError, match=r"<netlist>:3:.*Cd or its K, not both"):
         parse_netlist(".options fluid=water\nP1 a 150kPa\n"
                       "orifice O1 a atm diameter=2mm K=0.6 Cd=0.7\n")

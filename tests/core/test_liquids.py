@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from pneunet import Circuit, ParameterError
-from pneunet.errors import PneunetError
+from pneunet.common.errors import PneunetError
 from pneunet.netlist import parse_netlist
 
 RHO, MU, K = 998.2, 1.002e-3, 2.18e6  # water at 20 °C: kg/m³, Pa·s, kPa

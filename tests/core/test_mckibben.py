@@ -12,8 +12,8 @@ import pytest
 from scipy.optimize import brentq
 
 from pneunet import Circuit, ParameterError
-from pneunet.elements.mckibben import LoadWarning
-from pneunet.errors import NetlistError
+from pneunet.physics.elements.mckibben import LoadWarning
+from pneunet.common.errors import NetlistError
 from pneunet.netlist import parse_netlist, print_circuit
 from pneunet.netlist.runner import run_deck
 
@@ -168,8 +168,8 @@ def test_fig12_netlist_oscillates_between_the_turning_points(tmp_path):
     turning points of the valve + R_out subsystem, and the muscle contracts with it."""
     from pathlib import Path
 
-    from pneunet.analysis.branches import spec_from_circuit, stationary_branches
-    from pneunet.analysis.muscle import muscle_cycle, plot_muscle_run
+    from pneunet.physics.oscillator_branches import spec_from_circuit, stationary_branches
+    from pneunet.design.muscle import muscle_cycle, plot_muscle_run
     from pneunet.netlist import parse_file
 
     deck = parse_file(Path(__file__).resolve().parents[2] / "netlists" / "fig12_mckibben.pn")
@@ -193,7 +193,7 @@ def test_quasi_static_muscle_in_the_oscillator_matches_the_hanging_mass():
     and is carried across the valve's folds: the same cycle as the 200 g mass."""
     from pathlib import Path
 
-    from pneunet.analysis.muscle import muscle_cycle
+    from pneunet.design.muscle import muscle_cycle
     from pneunet.netlist import parse_netlist
 
     text = (Path(__file__).resolve().parents[2] / "netlists" / "fig12_mckibben.pn").read_text()

@@ -16,9 +16,9 @@ import pytest
 from scipy.integrate import cumulative_trapezoid, solve_ivp
 
 from pneunet import Circuit
-from pneunet.errors import NetlistError, ParameterError
+from pneunet.common.errors import NetlistError, ParameterError
 from pneunet.netlist import parse_netlist
-from pneunet.waveforms import Pulse
+from pneunet.physics.waveforms import Pulse
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "benchmarks"))
@@ -702,7 +702,7 @@ def test_a_failure_keeps_the_finished_windows(monkeypatch, processes):
     """A cell whose steps collapse mid-run: SolverError with the solution up to the last
     accepted window (finite, ending before the failure), as single-rate failures keep theirs."""
     from pneunet.engine.solvers import radau
-    from pneunet.errors import SolverError
+    from pneunet.common.errors import SolverError
 
     real, calls = radau._check_step, {"n": 0}
 

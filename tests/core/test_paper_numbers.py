@@ -2,9 +2,9 @@
 import numpy as np
 import pytest
 
-from pneunet.gas import AIR
-from pneunet.laws import quadrature_flow
-from pneunet.paper_circuits import CLIPPARD_LIKE, fill_circuit, flow_amplifier, oscillator
+from pneunet.physics.gas import AIR
+from pneunet.physics.laws import quadrature_flow
+from pneunet.design.paper_circuits import CLIPPARD_LIKE, fill_circuit, flow_amplifier, oscillator
 
 from .conftest import cycle_periods
 

@@ -8,8 +8,8 @@ from scipy.integrate import solve_ivp
 from scipy.interpolate import PchipInterpolator
 from scipy.optimize import brentq
 
-from pneunet.errors import PneunetError
-from pneunet.gas import AIR, GAS_CONSTANT
+from pneunet.common.errors import PneunetError
+from pneunet.physics.gas import AIR, GAS_CONSTANT
 from pneunet.netlist import parse_file
 
 AMBIENT, SUPPLY, R, T = 100.0, 400.0, 1.0, 293.15   # kPa, kPa, kPa·s/mg, K

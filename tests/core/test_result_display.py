@@ -1,8 +1,8 @@
 """Results as a user sees them: short reprs and plots a report can use."""
 import re
 
-from pneunet.analysis.oscillation import oscillator_period
-from pneunet.paper_circuits import oscillator
+from pneunet.engine.oscillation import oscillator_period
+from pneunet.design.paper_circuits import oscillator
 
 
 def assert_short(text, *words):
@@ -37,8 +37,8 @@ def test_solution_plot_draws_coinciding_flows_once_with_the_legend_outside():
 def test_circuit_deck_branches_and_measurements_reprs_are_short():
     from pathlib import Path
 
-    from pneunet.analysis.branches import stationary_branches
-    from pneunet.identify import load_measurements
+    from pneunet.physics.oscillator_branches import stationary_branches
+    from pneunet.truth.valves.identify import load_measurements
     from pneunet.netlist import parse_file
 
     root = Path(__file__).parents[2]
@@ -52,8 +52,8 @@ def test_circuit_deck_branches_and_measurements_reprs_are_short():
 
 
 def test_sweep_result_repr_counts_points_not_the_table():
-    from pneunet.analysis.circuits import oscillator as build
-    from pneunet.analysis.sweep import OscillationMeasure, grid, lin, run_sweep
+    from pneunet.design.circuits import oscillator as build
+    from pneunet.design.sweep import OscillationMeasure, grid, lin, run_sweep
 
     result = run_sweep(build, grid(lin("Rout", 0.0, 1.0, 2)), OscillationMeasure(t_stop=3.0),
                        workers=1, progress=False)

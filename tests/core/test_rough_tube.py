@@ -14,7 +14,7 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 from pneunet import Circuit, ParameterError
-from pneunet.errors import NetlistError
+from pneunet.common.errors import NetlistError
 from pneunet.netlist import parse_netlist
 from reference_lines import R_AIR, T  # tests/ is on pytest's sys.path
 
@@ -140,7 +140,7 @@ def test_netlist_liquid_tube_matches_python_and_bad_roughness_is_located():
 
 def test_closed_liquid_line_stores_rho_v_over_k():
     """0.5 mg/s for 1 s into a closed water line of 3.14 mL: the rise is m·K/(ρ·V)."""
-    from pneunet.waveforms import Step
+    from pneunet.physics.waveforms import Step
 
     c = Circuit("closed line", ambient=AMB, fluid="water", rtol=1e-7, atol=1e-7)
     c.flow_source("F1", "atm", "a", Step(0.5, 0.0, at=1.0))
@@ -155,7 +155,7 @@ def test_closed_liquid_line_stores_rho_v_over_k():
 def test_a_tube_holds_its_bore_its_given_volume_or_none(volume, stored_ml):
     """0.5 mg of air into two 10 mL volumes joined by a 2 mm × 1 m tube: the pressure rise is
     the mass over M·(20 mL + the line's volume)/(R·T) (volume=0: a resistance only)."""
-    from pneunet.waveforms import Step
+    from pneunet.physics.waveforms import Step
 
     c = Circuit("two volumes", ambient=AMB, rtol=1e-8, atol=1e-8)
     c.flow_source("F1", "atm", "a", Step(0.5, 0.0, at=1.0))

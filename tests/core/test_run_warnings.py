@@ -7,8 +7,8 @@ import warnings
 import numpy as np
 import pytest
 
-from pneunet.cli import main
-from pneunet.elements.run_checks import RangeWarning
+from pneunet.interfaces.cli import main
+from pneunet.physics.elements.run_checks import RangeWarning
 from pneunet.netlist import parse_netlist
 
 WATER = """.options fluid=water

@@ -60,7 +60,7 @@ def test_bad_run_files_are_named_errors(tmp_path):
 def test_run_command_writes_the_whole_transient(tmp_path):
     from pathlib import Path
 
-    from pneunet.cli import main
+    from pneunet.interfaces.cli import main
 
     netlist = Path(__file__).parents[2] / "netlists" / "oscillator.pn"
     assert main(["run", str(netlist), "-q", "-o", str(tmp_path), "--run-file", "npz"]) == 0

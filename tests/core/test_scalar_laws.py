@@ -4,10 +4,10 @@ reversal, a closed valve and a valve with its own backward parameters."""
 import numpy as np
 import pytest
 
-from pneunet import elements
-from pneunet.elements.base import FEW_INSTANCES, ElementSpec, FamilyContext
+from pneunet.physics import elements
+from pneunet.physics.elements.base import FEW_INSTANCES, ElementSpec, FamilyContext
 from pneunet.engine.options import SimulationOptions
-from pneunet.valve_params import ValveParams
+from pneunet.physics.valve_params import ValveParams
 
 BACKWARD = ValveParams(Rf=0.9, pclose=60.0, ptrans=150.0, e=1.8, ain=0.7, aout=0.4)
 

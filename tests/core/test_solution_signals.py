@@ -3,9 +3,9 @@ import numpy as np
 import pytest
 
 from pneunet import Circuit
-from pneunet.laws import quadrature_flow
+from pneunet.physics.laws import quadrature_flow
 from pneunet.engine.solution import LazySignals
-from pneunet.waveforms import Pulse
+from pneunet.physics.waveforms import Pulse
 
 
 @pytest.fixture(scope="module")

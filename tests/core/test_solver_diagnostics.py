@@ -6,10 +6,10 @@ from pathlib import Path
 
 import pytest
 
-from pneunet.engine import diagnostics
-from pneunet.engine.diagnostics import SolverWarning, parse
-from pneunet.errors import SolverError
-from pneunet.paper_circuits import oscillator
+from pneunet.common import solver_messages as diagnostics
+from pneunet.common.solver_messages import SolverWarning, parse
+from pneunet.common.errors import SolverError
+from pneunet.design.paper_circuits import oscillator
 
 RAW = ("[WARNING]", "[rank 0]", "Error: -", "ida_ls.c", "feedstock")
 
@@ -95,7 +95,7 @@ def test_other_output_during_a_solve_is_written_back(capfd, monkeypatch):
 
 
 def test_cli_run_json_reports_the_messages_as_data_and_q_silences_them(tmp_path, capfd):
-    from pneunet.cli import main
+    from pneunet.interfaces.cli import main
 
     shipped = (Path(__file__).parents[2] / "netlists" / "oscillator.pn").read_text()
     netlist = tmp_path / "osc.pn"
@@ -129,9 +129,9 @@ def _lenient(circuit):
     return {"x": 1.0}
 
 
-@pytest.mark.filterwarnings("ignore::pneunet.engine.diagnostics.SolverWarning")
+@pytest.mark.filterwarnings("ignore::pneunet.common.solver_messages.SolverWarning")
 def test_sweep_counts_points_with_messages_and_a_swallowed_solver_failure_as_failed(capfd):
-    from pneunet.analysis.sweep import run_sweep
+    from pneunet.design.sweep import run_sweep
 
     folding = run_sweep(_folding, [{"Rvent.R": 3.0}], _lenient, workers=1, progress=False)
     assert folding.failed == 0 and folding.with_solver_messages == 1
@@ -160,7 +160,7 @@ class _Stream:
 def test_progress_bars_draw_only_on_a_terminal(monkeypatch, tty):
     import sys
 
-    from pneunet.progress import progress_bar
+    from pneunet.common.progress import progress_bar
 
     stream = _Stream(tty)
     monkeypatch.setattr(sys, "stderr", stream)
@@ -184,10 +184,10 @@ def _fold_run(_):
     return oscillator(fold_threshold=1e-8).tran(5.0).stats["solver_messages"]
 
 
-@pytest.mark.filterwarnings("ignore::pneunet.engine.diagnostics.SolverWarning")
+@pytest.mark.filterwarnings("ignore::pneunet.common.solver_messages.SolverWarning")
 def test_messages_of_simulations_in_worker_processes_reach_the_parents_count():
-    from pneunet.engine.diagnostics import collect, pool_map, summarize
-    from pneunet.workers import process_pool
+    from pneunet.common.solver_messages import collect, pool_map, summarize
+    from pneunet.common.workers import process_pool
 
     pool = process_pool(2)
     try:
@@ -203,7 +203,7 @@ def test_a_process_without_stdout_and_stderr_still_simulates(tmp_path):
     import sys
 
     done = tmp_path / "done"
-    code = ("from pneunet.paper_circuits import oscillator; "
+    code = ("from pneunet.design.paper_circuits import oscillator; "
             f"n = oscillator().tran(1.0).t.size; open({str(done)!r}, 'w').write(str(n))")
     subprocess.run([sys.executable, "-c", code], stdout=subprocess.DEVNULL, check=True,
                    stderr=subprocess.DEVNULL, close_fds=True,

@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 
 from pneunet import Circuit, ParameterError
-from pneunet.gas import AIR, GAS_CONSTANT
+from pneunet.physics.gas import AIR, GAS_CONSTANT
 from pneunet.netlist import parse_file, parse_netlist
-from pneunet.waveforms import Function, PiecewiseLinear, Step
+from pneunet.physics.waveforms import Function, PiecewiseLinear, Step
 
 T_CORNERS, P_CORNERS = (0.0, 0.2, 1.0, 1.2), (100.0, 300.0, 300.0, 150.0)
 
@@ -35,7 +35,7 @@ def test_function_source_reproduces_pwl_and_step():
 
 
 def test_function_flow_source_and_bad_functions():
-    from pneunet.waveforms import Sine
+    from pneunet.physics.waveforms import Sine
 
     def run(value):
         c = Circuit("flow", ambient=100.0, rtol=1e-8, atol=1e-8)

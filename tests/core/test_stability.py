@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from pneunet.paper_circuits import oscillator
+from pneunet.design.paper_circuits import oscillator
 
 
 def test_the_papers_oscillator_will_not_settle_at_its_operating_point():
@@ -23,7 +23,7 @@ def test_growth_rate_equals_the_linearised_papers_equations():
 
     from scipy.optimize import fsolve
 
-    from pneunet.valve_params import PAPER_VALVES
+    from pneunet.physics.valve_params import PAPER_VALVES
     from reference_valve import flow  # tests/ is on pytest's sys.path
 
     axi = PAPER_VALVES["axi"].as_dict()

@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from pneunet import Circuit, ParameterError, SolverError, TopologyError
-from pneunet.paper_circuits import oscillator
+from pneunet.design.paper_circuits import oscillator
 
 
 def test_duplicate_element_name():
@@ -120,7 +120,7 @@ def test_solution_is_immutable_and_exports_unit_named_columns(oscillator_run, tm
 
 def test_mass_is_conserved_over_a_transient(oscillator_run):
     """Mass stored in the tank = ∫ (inflow through R_out − outflow through R_vent) dt."""
-    from pneunet.gas import AIR
+    from pneunet.physics.gas import AIR
 
     s = oscillator_run
     keep = np.concatenate([[True], np.diff(s.t) > 0])  # drop the duplicate time of each jump
@@ -137,7 +137,7 @@ def test_a_circuit_without_unknowns_is_its_sources():
     import numpy as np
 
     from pneunet import Circuit
-    from pneunet.waveforms import Step
+    from pneunet.physics.waveforms import Step
 
     c = Circuit("sources only", ambient=100.0)
     c.pressure_source("P1", "a", Step(200.0, 300.0, at=0.5))

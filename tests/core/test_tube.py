@@ -12,9 +12,9 @@ from scipy.optimize import brentq
 from scipy.sparse import diags
 
 from pneunet import Circuit, ParameterError
-from pneunet.errors import NetlistError
+from pneunet.common.errors import NetlistError
 from pneunet.netlist import parse_netlist, print_circuit
-from pneunet.waveforms import Step
+from pneunet.physics.waveforms import Step
 from reference_lines import MU, R_AIR, T, line_flow  # tests/ is on pytest's sys.path
 
 

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from pneunet import Circuit, Gas, Liquid, ParameterError
-from pneunet.errors import NetlistError
+from pneunet.common.errors import NetlistError
 from pneunet.netlist import parse_netlist, print_circuit
-from pneunet.waveforms import Step
+from pneunet.physics.waveforms import Step
 
 GLYCERIN = ".fluid glycerol rho=1260kg/m3 mu=1.41Pa*s K=4.35GPa\n"
 R_GAS = 8.314462618  # J/(mol·K)

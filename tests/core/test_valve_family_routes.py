@@ -2,14 +2,14 @@
 (tests/reference_valve.py) and a user's flow model written here: six-parameter valves
 with and without backward parameters next to user models in one family, the flows and
 partials at one time, the flows over a history, and the recorded signals (issue 39:
-mutants of elements/valves.py in the user-model and history paths survived)."""
+mutants of physics/elements/valves.py in the user-model and history paths survived)."""
 import numpy as np
 import pytest
 
-from pneunet import elements
-from pneunet.elements.base import ElementSpec, FamilyContext
+from pneunet.physics import elements
+from pneunet.physics.elements.base import ElementSpec, FamilyContext
 from pneunet.engine.options import SimulationOptions
-from pneunet.valve_params import PAPER_VALVES, ValveParams
+from pneunet.physics.valve_params import PAPER_VALVES, ValveParams
 import reference_valve as ref  # tests/ is on pytest's sys.path
 
 AXI = PAPER_VALVES["axi"].as_dict()

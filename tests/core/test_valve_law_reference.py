@@ -2,7 +2,7 @@
 direction and for both of the paper's valve models (issue 39).
 
 The reference (tests/reference_valve.py) is the paper's equations written in plain
-Python; a few values are worked out by hand below.  Covered: pneunet.laws (exact root
+Python; a few values are worked out by hand below.  Covered: pneunet.physics.laws (exact root
 and, on the scalar path, with the circuit's flow band) and the valve element family
 (vectorised and per-instance routes), forward flow (p_in > p_out), backward flow
 (p_out > p_in: a_in on the out port, eq. 25) and the mirror valve, whose backward
@@ -15,8 +15,8 @@ import pytest
 
 from pneunet import Circuit
 from pneunet.engine.assembly import CircuitDAE
-from pneunet.laws import Scalar, valve_flow, valve_flow_and_partials
-from pneunet.valve_params import PAPER_VALVES
+from pneunet.physics.laws import Scalar, valve_flow, valve_flow_and_partials
+from pneunet.physics.valve_params import PAPER_VALVES
 import reference_valve as ref  # tests/ is on pytest's sys.path
 
 MODELS = ("axi", "mirror", "mirror_backward")

@@ -3,14 +3,14 @@ import json
 
 import pytest
 
-from pneunet.cli import main
+from pneunet.interfaces.cli import main
 from pneunet.design import design
 
 
 def resimulated_period(path, values):
     """Period (s) of p(tank) over the second half of the netlist's transient, simulated
     without the design machinery."""
-    from pneunet import measure
+    from pneunet.engine import measure
     from pneunet.netlist import parse_file
 
     sol = parse_file(path, overrides=values).circuit.tran(14.0)

@@ -8,9 +8,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from pneunet import measure
-from pneunet.cli import main
-from pneunet.errors import ParameterError
+from pneunet.engine import measure
+from pneunet.interfaces.cli import main
+from pneunet.common.errors import ParameterError
 from pneunet.netlist import parse_file
 
 
@@ -77,8 +77,8 @@ def test_yield_equals_brute_force_of_the_same_samples(short_oscillator, tmp_path
 
 def test_yield_under_a_fitted_covariance(short_oscillator, tmp_path, capsys):
     """pneunet fit on a bench CSV → fit.json → the yield samples the fitted covariance."""
-    from pneunet.identify import simulate_bench
-    from pneunet.valve_params import PAPER_VALVES
+    from pneunet.truth.valves.identify import simulate_bench
+    from pneunet.physics.valve_params import PAPER_VALVES
 
     bench = tmp_path / "bench.csv"
     simulate_bench(PAPER_VALVES["axi"], seed=6).to_csv(bench, index=False)
@@ -114,7 +114,7 @@ def test_yield_se_stops_once_the_interval_is_as_narrow_as_asked():
     """--yield-se: the early stop's Wilson interval is at most ±1.96·SE wide, its samples
     are the full run's first ones (simulated once), and its yield agrees with the full
     run's within the sampling error of the samples it left out."""
-    from pneunet.analysis.sweep import tolerance
+    from pneunet.design.sweep import tolerance
     from pneunet.design.problem import Problem
     from pneunet.design.spread import Spread
     from pneunet.design.yields import yield_analysis

@@ -8,8 +8,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from pneunet.diagnose import diagnose
-from pneunet.diagnose.scenarios import alternating_protocol
+from pneunet.truth.valves.diagnose import diagnose
+from pneunet.truth.valves.diagnose.scenarios import alternating_protocol
 
 AXI = {"Rf": 0.566, "pclose": 96.42, "ptrans": 155.1, "e": 1.99, "ain": 0.32, "aout": 0.71}
 

@@ -6,7 +6,8 @@ import functools
 
 import pytest
 
-from pneunet.diagnose.scenarios import LIBRARY_SCENARIOS, UNLISTED_SCENARIOS, run_scenario
+from pneunet.truth.valves.diagnose.scenarios import (LIBRARY_SCENARIOS, UNLISTED_SCENARIOS,
+                                                     run_scenario)
 
 PAIRS = ["leak+hysteresis", "choked+laminar", "internal-drop+leak"]
 

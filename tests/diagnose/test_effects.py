@@ -2,11 +2,12 @@
 import numpy as np
 import pytest
 
-from pneunet.effects import (LIBRARY_EFFECTS, Effect, Param, ValveModel, available_effects,
-                             get_effect, register_effect, unregister_effect)
-from pneunet.errors import ParameterError
-from pneunet.laws import valve_flow
-from pneunet.valve_params import PAPER_VALVES
+from pneunet.physics.valve_effects import (LIBRARY_EFFECTS, Effect, Param, ValveModel,
+                                           available_effects, get_effect, register_effect,
+                                           unregister_effect)
+from pneunet.common.errors import ParameterError
+from pneunet.physics.laws import valve_flow
+from pneunet.physics.valve_params import PAPER_VALVES
 
 P = PAPER_VALVES["axi"]
 rng = np.random.default_rng(3)

@@ -1,4 +1,4 @@
-"""The truth core's 95 % intervals (pneunet.truth.intervals) are neither too narrow nor
+"""The truth core's 95 % intervals (pneunet.truth.core.intervals) are neither too narrow nor
 too wide (issue 39): on a stand-alone generator — an exponential decay y = A·e^(−t/τ)
 with white Gaussian noise, fitted in ln-parameters by scipy — they cover the truth in
 90–98 % of 300 repetitions, and their half-width matches the estimator's own spread
@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from scipy.optimize import least_squares
 
-from pneunet.truth.intervals import intervals
+from pneunet.truth.core.intervals import intervals
 
 A, TAU, SIGMA = 300.0, 2.0, 4.0  # kPa, s, kPa
 T = np.linspace(0.0, 6.0, 60)

@@ -1,4 +1,4 @@
-"""The truth core's autocorrelation gate and sandwich covariance (pneunet.truth.intervals)
+"""The truth core's autocorrelation gate and sandwich covariance (pneunet.truth.core.intervals)
 against their formulas: Ljung–Box as statsmodels computes it, the AR order and
 coefficients as statsmodels' ar_select_order/AutoReg give them, the covariance written out
 (issue 39; the coverage of the resulting intervals: test_interval_coverage.py)."""
@@ -11,7 +11,7 @@ def test_ljung_box_p_is_statsmodels_acorr_ljungbox():
     signals equals statsmodels' acorr_ljungbox (10 lags, each signal's mean removed)."""
     from statsmodels.stats.diagnostic import acorr_ljungbox
 
-    from pneunet.truth.intervals import ljung_box_p
+    from pneunet.truth.core.intervals import ljung_box_p
 
     rng = np.random.default_rng(7)
     parts = []
@@ -66,7 +66,7 @@ def test_sandwich_is_the_ar_prewhitened_formula():
     from statsmodels.tsa.ar_model import AutoReg, ar_select_order
     from statsmodels.tsa.stattools import acf
 
-    from pneunet.truth.intervals import sandwich
+    from pneunet.truth.core.intervals import sandwich
 
     rng = np.random.default_rng(3)
     n = 300
@@ -90,7 +90,7 @@ def test_sandwich_of_ar1_residuals_corrects_the_coefficients_bias():
     mean; −(p·(1+ρ) + 2ρ)/n after p smooth parameters): ρ̂ + that is used."""
     from statsmodels.tsa.ar_model import AutoReg, ar_select_order
 
-    from pneunet.truth.intervals import sandwich
+    from pneunet.truth.core.intervals import sandwich
 
     rng = np.random.default_rng(11)
     n = 400
@@ -110,7 +110,7 @@ def test_sandwich_keeps_each_signal_to_itself():
     """Two signals: one AR pooled over both (least squares on the stacked lags), no lag
     crossing from one signal to the other, the rows' order between the signals
     irrelevant; a random walk's AR is kept stationary (its roots inside |z| ≤ 0.99)."""
-    from pneunet.truth.intervals import _autoregression, sandwich
+    from pneunet.truth.core.intervals import _autoregression, sandwich
 
     rng = np.random.default_rng(7)
     n, kmax = 200, 14
@@ -146,7 +146,7 @@ def test_intervals_are_estimate_plus_minus_student_t_standard_errors(confidence)
     degrees of freedom; ends exp(x ∓ t·s.e.) for ln-parameters, x ∓ t·s.e. otherwise."""
     from scipy import stats
 
-    from pneunet.truth.intervals import intervals
+    from pneunet.truth.core.intervals import intervals
 
     rng = np.random.default_rng(2)
     n = 40
@@ -172,7 +172,7 @@ def test_autocorrelated_intervals_use_the_sandwich_never_narrower_than_white(rho
     effective degrees of freedom less p."""
     from scipy import stats
 
-    from pneunet.truth.intervals import intervals, sandwich
+    from pneunet.truth.core.intervals import intervals, sandwich
 
     rng = np.random.default_rng(4)
     n = 200
@@ -198,7 +198,7 @@ def test_sandwich_of_short_signals_and_of_a_perfect_fit():
     least-squares AR is pulled back to its largest root at exactly 0.99."""
     from statsmodels.tsa.ar_model import AutoReg, ar_select_order
 
-    from pneunet.truth.intervals import _autoregression, sandwich
+    from pneunet.truth.core.intervals import _autoregression, sandwich
 
     rng = np.random.default_rng(8)
     n = 20
@@ -225,7 +225,7 @@ def test_ar_order_and_coefficients_are_statsmodels_at_any_scale():
     2 per coefficient), the same coefficients, a covariance scaling with the square."""
     from statsmodels.tsa.ar_model import AutoReg, ar_select_order
 
-    from pneunet.truth.intervals import sandwich
+    from pneunet.truth.core.intervals import sandwich
 
     n = 300
     t = np.linspace(0.0, 6.0, n)
@@ -245,7 +245,7 @@ def test_ar_order_and_coefficients_are_statsmodels_at_any_scale():
 
 def test_white_residuals_give_the_heteroskedasticity_consistent_sandwich():
     """AR order 0 (white): (JᵀJ)⁻¹ Σ Jₜ Jₜᵀ rₜ² (JᵀJ)⁻¹ · n/(n − p), White's HC1."""
-    from pneunet.truth.intervals import sandwich
+    from pneunet.truth.core.intervals import sandwich
 
     n = 300
     J = np.column_stack([np.ones(n), np.linspace(0.0, 1.0, n)])
@@ -262,7 +262,7 @@ def test_negatively_correlated_residuals_keep_their_coefficient_and_n_dof():
     effective degrees of freedom are at most n."""
     from statsmodels.tsa.ar_model import AutoReg
 
-    from pneunet.truth.intervals import sandwich
+    from pneunet.truth.core.intervals import sandwich
 
     n = 300
     J = np.column_stack([np.ones(n), np.linspace(0.0, 1.0, n)])
@@ -275,7 +275,7 @@ def test_negatively_correlated_residuals_keep_their_coefficient_and_n_dof():
 
 
 def test_ljung_box_needs_more_than_three_times_its_lags():
-    from pneunet.truth.intervals import ljung_box_p
+    from pneunet.truth.core.intervals import ljung_box_p
 
     r = np.random.default_rng(0).standard_normal(31)
     assert 0.0 < ljung_box_p(r) <= 1.0
@@ -287,7 +287,7 @@ def test_ar_order_is_statsmodels_aic_choice_on_forty_records():
     statsmodels' ar_select_order (AIC, at most 12 lags) every time (orders 0 to 9 here)."""
     from statsmodels.tsa.ar_model import ar_select_order
 
-    from pneunet.truth.intervals import _autoregression
+    from pneunet.truth.core.intervals import _autoregression
 
     rng = np.random.default_rng(1)
     records = [_ar_noise(rng, rng.uniform(-0.3, 0.3, 4), 120) for _ in range(40)]
@@ -303,7 +303,7 @@ def test_intervals_keep_at_least_one_degree_of_freedom():
     like a random walk (effective dof 1.1 − 2 parameters): one."""
     from scipy import stats
 
-    from pneunet.truth.intervals import intervals
+    from pneunet.truth.core.intervals import intervals
 
     J = np.array([[1.0, 0.0], [1.0, 1.0], [1.0, 2.0]])
     r = np.array([0.5, -1.0, 0.5])

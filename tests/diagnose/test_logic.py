@@ -4,12 +4,12 @@ import json
 import numpy as np
 import pytest
 
-from pneunet.cli import main
-from pneunet.diagnose import diagnose
-from pneunet.diagnose.features import noise_floor, prepare
-from pneunet.diagnose.scenarios import bench, reduced_protocol, scenario_truth
-from pneunet.effects import ValveModel
-from pneunet.errors import DataError, ParameterError
+from pneunet.interfaces.cli import main
+from pneunet.truth.valves.diagnose import diagnose
+from pneunet.truth.valves.diagnose.features import noise_floor, prepare
+from pneunet.truth.valves.diagnose.scenarios import bench, reduced_protocol, scenario_truth
+from pneunet.physics.valve_effects import ValveModel
+from pneunet.common.errors import DataError, ParameterError
 
 REQUIRED_KEYS = {"adequate", "unexplained", "accepted", "ranking", "baseline", "final",
                  "where", "noise_floor"}
@@ -103,7 +103,7 @@ def test_cli_json_card_and_plots(tmp_path, leak_small, capsys):
 def test_cli_plugin_registers_user_effect(tmp_path, leak_small, capsys):
     plugin = tmp_path / "my_effects.py"
     plugin.write_text(
-        "from pneunet.effects import Effect, Param, register_effect\n"
+        "from pneunet.physics.valve_effects import Effect, Param, register_effect\n"
         "@register_effect(replace=True)\n"
         "class Gain(Effect):\n"
         "    '''Flow-sensor gain error: ṁ_meas = (1 + g) ṁ. Null value 0.'''\n"
@@ -122,5 +122,5 @@ def test_cli_plugin_registers_user_effect(tmp_path, leak_small, capsys):
         assert {r["effect"] for r in j["ranking"]} == {"sensor-gain", "leak"}
         assert j["accepted"] == ["leak"]
     finally:
-        from pneunet.effects import unregister_effect
+        from pneunet.physics.valve_effects import unregister_effect
         unregister_effect("sensor-gain")

@@ -4,10 +4,10 @@ test per valve effect (each effect at a value where it changes the flow)."""
 import numpy as np
 import pytest
 
-from pneunet.effects import ValveModel, get_effect
+from pneunet.physics.valve_effects import ValveModel, get_effect
 from pneunet.engine.simulate import operating_point
 from pneunet.netlist import parse_file
-from pneunet.valve_params import PAPER_VALVES
+from pneunet.physics.valve_params import PAPER_VALVES
 
 #: (p_in, p_out, p_ctrl) kPa: open, near the threshold, closed, low ratio, low pressures
 POINTS = [(396.0, 221.0, 96.0), (596.0, 346.0, 246.0), (296.0, 121.0, 171.0),

@@ -1,11 +1,11 @@
-"""The noise floor from second differences (pneunet.truth.noise) against its formulas and
+"""The noise floor from second differences (pneunet.truth.core.noise) against its formulas and
 on a stand-alone record: white noise of known σ under a smooth misfit, with a few sharp
 places, and records cut into groups (issue 39: the module had no direct test)."""
 import numpy as np
 import pytest
 
-from pneunet.truth.noise import (MAD_TO_SIGMA, difference_sigma, robust_sigma,
-                                 second_differences, segments)
+from pneunet.truth.core.noise import (MAD_TO_SIGMA, difference_sigma, robust_sigma,
+                                      second_differences, segments)
 
 
 def test_second_differences_by_hand_and_within_groups():

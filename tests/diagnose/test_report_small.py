@@ -1,8 +1,8 @@
 """A diagnosis of data too small for a noise estimate (24 points) reports the noise
 floor as not estimated instead of failing in the report (it was a TypeError)."""
-from pneunet.diagnose import diagnose
-from pneunet.identify import paper_protocol, simulate_bench
-from pneunet.valve_params import PAPER_VALVES
+from pneunet.truth.valves.diagnose import diagnose
+from pneunet.truth.valves.identify import paper_protocol, simulate_bench
+from pneunet.physics.valve_params import PAPER_VALVES
 
 
 def test_report_without_a_noise_floor():

@@ -4,7 +4,7 @@ Every call uses the default tolerance, the one the valve and circuit diagnoses u
 import pytest
 
 from pneunet.truth import Step, decide, verdict
-from pneunet.truth.verdict import at_floor
+from pneunet.truth.core.verdict import at_floor
 
 FLOOR = 2.0  # any unit
 

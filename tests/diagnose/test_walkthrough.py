@@ -2,7 +2,7 @@
 import re
 from pathlib import Path
 
-from pneunet.effects import available_effects, unregister_effect
+from pneunet.physics.valve_effects import available_effects, unregister_effect
 
 DOC = Path(__file__).resolve().parents[2] / "docs" / "diagnose.md"
 

@@ -1,8 +1,8 @@
 """Shared bench data and fits (session scope: each fit once per test run)."""
 import pytest
 
-from pneunet.identify import fit_valve, simulate_bench
-from pneunet.valve_params import PAPER_VALVES
+from pneunet.truth.valves.identify import fit_valve, simulate_bench
+from pneunet.physics.valve_params import PAPER_VALVES
 
 #: bench seed of the single-dataset tests (outputs, figures, CLI).  No test checks
 #: interval coverage on it: the round-trip tests fit the first ROUND_TRIP_SEEDS

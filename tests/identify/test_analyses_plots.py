@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pneunet.identify import analyses, fit_valve, plots, simulate_bench
+from pneunet.truth.valves.identify import analyses, fit_valve, plots, simulate_bench
 
 DOCS = Path(__file__).resolve().parents[2] / "docs" / "figures" / "identify"
 

@@ -2,9 +2,9 @@
 import numpy as np
 import pytest
 
-from pneunet.errors import ParameterError
-from pneunet.identify import OutletRegulator, paper_protocol, simulate_bench
-from pneunet.valve_params import PAPER_VALVES
+from pneunet.common.errors import ParameterError
+from pneunet.truth.valves.identify import OutletRegulator, paper_protocol, simulate_bench
+from pneunet.physics.valve_params import PAPER_VALVES
 
 
 def test_paper_protocol_has_4410_points_in_experiment_order():
@@ -63,7 +63,7 @@ def test_callable_flow_sees_time_and_sweep():
     def leaky(frame):
         seen["columns"] = set(frame.columns)
         # a drifting leak: 2 mg/s per hour on top of the paper valve
-        from pneunet.laws import valve_flow
+        from pneunet.physics.laws import valve_flow
 
         base = valve_flow(frame["p_in_kPa"], frame["p_out_kPa"], frame["p_ctrl_kPa"],
                           **PAPER_VALVES["axi"].as_dict())

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from pneunet.cli import main
+from pneunet.interfaces.cli import main
 
 CORPUS = Path(__file__).parent / "broken_data"
 EXPECTED = json.loads((CORPUS / "expected.json").read_text())

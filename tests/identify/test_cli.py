@@ -3,7 +3,7 @@ import json
 
 import pytest
 
-from pneunet.cli import main
+from pneunet.interfaces.cli import main
 
 CANON = ["time_s", "p_in_kPa", "p_out_kPa", "p_ctrl_kPa", "mdot_mg_s"]
 

@@ -3,9 +3,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from pneunet.errors import DataError
-from pneunet.identify import load_measurements, simulate_bench
-from pneunet.valve_params import PAPER_VALVES
+from pneunet.common.errors import DataError
+from pneunet.truth.valves.identify import load_measurements, simulate_bench
+from pneunet.physics.valve_params import PAPER_VALVES
 
 CANON = ["time_s", "p_in_kPa", "p_out_kPa", "p_ctrl_kPa", "mdot_mg_s"]
 

@@ -5,10 +5,10 @@ import re
 import numpy as np
 import pytest
 
-from pneunet.errors import DataError
-from pneunet.identify import fit_valve, simulate_bench
-from pneunet.identify.fit import NAMES, auto_mdot_min
-from pneunet.valve_params import PAPER_VALVES, ValveParams
+from pneunet.common.errors import DataError
+from pneunet.truth.valves.identify import fit_valve, simulate_bench
+from pneunet.truth.valves.identify.fit import NAMES, auto_mdot_min
+from pneunet.physics.valve_params import PAPER_VALVES, ValveParams
 
 
 VALVES = ("axi", "mirror_forward", "mirror_backward")
@@ -84,7 +84,7 @@ def test_paper_threshold_fixed_at_one_mg_s(round_trips):
 
 
 def test_sweep_groups_of_the_paper_protocol(bench):
-    from pneunet.identify.fit import sweep_groups
+    from pneunet.truth.valves.identify.fit import sweep_groups
 
     data = bench("axi")
     groups = sweep_groups(data)
@@ -181,7 +181,7 @@ def test_model_card_round_trips_into_the_same_flows(fitted, bench):
     fit = fitted("axi", mdot_min="auto")
     name, params = _parse_card(fit.model_card("AXI_FIT"))
     assert name == "AXI_FIT"
-    from pneunet.laws import valve_flow
+    from pneunet.physics.laws import valve_flow
 
     data = bench("axi")
     flows = valve_flow(data["p_in_kPa"], data["p_out_kPa"], data["p_ctrl_kPa"],

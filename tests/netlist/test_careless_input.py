@@ -5,7 +5,7 @@ import warnings
 
 import pytest
 
-from pneunet.errors import InputWarning, NetlistError
+from pneunet.common.errors import InputWarning, NetlistError
 from pneunet.netlist import parse_netlist
 
 HEAD = "P1 a 200kPa\n"

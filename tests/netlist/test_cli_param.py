@@ -4,7 +4,7 @@ import json
 
 import pytest
 
-from pneunet.cli import main
+from pneunet.interfaces.cli import main
 from pneunet.netlist import parse_netlist, runner
 
 NET = """* rc

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pneunet.errors import NetlistError
+from pneunet.common.errors import NetlistError
 from pneunet.netlist import parse_netlist, runner
 
 DOCS = Path(__file__).resolve().parents[2] / "docs"

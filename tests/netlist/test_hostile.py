@@ -5,8 +5,8 @@ import time
 
 import pytest
 
-from pneunet.cli import main
-from pneunet.errors import NetlistError
+from pneunet.interfaces.cli import main
+from pneunet.common.errors import NetlistError
 from pneunet.netlist import parse_file, parse_netlist
 
 BASE = "P1 a 200kPa\nR1 a atm 1\nV1 a 10mL\n"
@@ -217,7 +217,7 @@ def test_a_python_name_that_would_not_parse_back_is_refused(name):
     """Circuit.resistor("R\\n1", ...) made print_circuit write a netlist that did not parse
     back: every name and node is one netlist word, else a ParameterError naming it."""
     from pneunet import Circuit
-    from pneunet.errors import ParameterError
+    from pneunet.common.errors import ParameterError
     from pneunet.netlist import print_circuit
 
     c = Circuit()
@@ -418,7 +418,7 @@ def test_a_bad_pwl_corner_is_located(body, place, message):
 
 
 def test_a_pwl_level_far_from_the_usual_still_warns_at_its_column():
-    from pneunet.errors import InputWarning
+    from pneunet.common.errors import InputWarning
 
     with pytest.warns(InputWarning) as record:
         parse_netlist(PWL_HEAD + "0 96kPa\n+ 1 0)\n")

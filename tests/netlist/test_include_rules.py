@@ -11,7 +11,7 @@ from types import SimpleNamespace
 
 import pytest
 
-from pneunet.errors import NetlistError
+from pneunet.common.errors import NetlistError
 from pneunet.netlist import includes, parse_file
 from pneunet.netlist.includes import IncludePolicy, Opened
 

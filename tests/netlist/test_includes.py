@@ -5,8 +5,8 @@ from pathlib import Path
 
 import pytest
 
-from pneunet.cli import main
-from pneunet.errors import NetlistError
+from pneunet.interfaces.cli import main
+from pneunet.common.errors import NetlistError
 from pneunet.netlist import parse_file
 
 LONG = "a" * 5000

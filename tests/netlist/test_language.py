@@ -2,10 +2,10 @@
 import numpy as np
 import pytest
 
-from pneunet import measure as M
-from pneunet.errors import NetlistError
+from pneunet.engine import measure as M
+from pneunet.common.errors import NetlistError
 from pneunet.netlist import parse_file, parse_netlist
-from pneunet.waveforms import Pulse, Sine, Step
+from pneunet.physics.waveforms import Pulse, Sine, Step
 
 
 def params(text, name):
@@ -124,7 +124,7 @@ def test_model_cards_and_paper_valves():
 
 
 def test_model_card_with_effect_parameters():
-    from pneunet.effects import available_effects, get_effect
+    from pneunet.physics.valve_effects import available_effects, get_effect
 
     eid = available_effects()[0]
     eff = get_effect(eid)

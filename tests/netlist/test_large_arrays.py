@@ -5,9 +5,9 @@ from pathlib import Path
 import pytest
 
 from pneunet import Circuit
-from pneunet.cli import main
+from pneunet.interfaces.cli import main
 from pneunet.netlist import parse_file, parse_netlist, print_circuit
-from pneunet.waveforms import Pulse
+from pneunet.physics.waveforms import Pulse
 
 CELLS = Path(__file__).resolve().parents[2] / "benchmarks" / "cells10k.pn"
 

@@ -4,8 +4,8 @@ from pathlib import Path
 
 import pytest
 
-from pneunet.cli import main
-from pneunet.errors import NetlistError, printable
+from pneunet.interfaces.cli import main
+from pneunet.common.errors import NetlistError, printable
 from pneunet.netlist import parse_file
 
 CORPUS = sorted((Path(__file__).parent / "malformed").glob("*.pn"))
@@ -127,7 +127,7 @@ def test_max_output_points_raised_by_limit_reaches_the_engine(capsys, tmp_path):
     the default refuses a grid the default allows, and a .tran over the engine's default
     runs once the limit is raised (checked on the API: the engine takes the deck's word)."""
     from pneunet import Circuit
-    from pneunet.errors import PneunetError
+    from pneunet.common.errors import PneunetError
 
     net = tmp_path / "n.pn"
     net.write_text("P1 a 200kPa\nR1 a atm 1\nV1 a 10mL\n.tran 10ms 1s\n")

@@ -4,10 +4,10 @@ from pathlib import Path
 
 import pytest
 
-from pneunet.analysis import sweep as S
-from pneunet.analysis.circuits import oscillator
-from pneunet.cli import main
-from pneunet.errors import NetlistError, ParameterError
+from pneunet.design import sweep as S
+from pneunet.design.circuits import oscillator
+from pneunet.interfaces.cli import main
+from pneunet.common.errors import NetlistError, ParameterError
 from pneunet.netlist import parse_file
 
 OSC = Path(__file__).parents[2] / "netlists" / "oscillator.pn"

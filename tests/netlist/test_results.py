@@ -3,9 +3,9 @@ a simulation that cannot be completed is exit 2 with one message."""
 import numpy as np
 import pytest
 
-from pneunet.cli import main
+from pneunet.interfaces.cli import main
 from pneunet.engine.solution import Solution
-from pneunet.errors import SolverError
+from pneunet.common.errors import SolverError
 from pneunet.netlist import runner
 
 NET = "P1 a 200kPa\nR1 a tank 1\nVtank tank 10mL\nR2 tank atm 1\n.tran 0.5s 1s\n"

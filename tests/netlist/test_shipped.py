@@ -6,8 +6,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from pneunet import Circuit, measure
-from pneunet.cli import main
+from pneunet import Circuit
+from pneunet.engine import measure
+from pneunet.interfaces.cli import main
 from pneunet.netlist import parse_file, parse_netlist
 from pneunet.netlist.runner import run_deck
 

@@ -4,7 +4,7 @@ saved run equal to its solution)."""
 import numpy as np
 import pytest
 
-from pneunet.gas import AIR, GAS_CONSTANT
+from pneunet.physics.gas import AIR, GAS_CONSTANT
 from pneunet.netlist import parse_netlist, runner
 
 JUMP = "PWL(0 100kPa 1 300kPa 1 200kPa 2 200kPa)"   # 300 kPa just before t = 1, 200 after
@@ -60,7 +60,7 @@ def test_a_volume_flow_in_a_liquid_circuit_is_the_liquids_own_volume():
 
 
 def test_standard_litres_are_refused_in_a_liquid_circuit():
-    from pneunet.errors import NetlistError
+    from pneunet.common.errors import NetlistError
 
     with pytest.raises(NetlistError) as info:
         parse_netlist(".options fluid=water\nF1 atm act 2slpm\naccumulator A1 act 20mL "

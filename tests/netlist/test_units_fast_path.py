@@ -2,7 +2,7 @@
 import pytest
 
 from pneunet.netlist.values import SCALE, SCALE_LETTER_UNITS, pint_dimension_matches
-from pneunet.units import FAST_FACTORS, SLOTS, registry
+from pneunet.physics.units import FAST_FACTORS, SLOTS, registry
 
 
 @pytest.mark.parametrize("unit, slot", sorted(FAST_FACTORS))
@@ -27,7 +27,7 @@ def test_a_netlist_with_common_units_does_not_build_the_pint_registry(tmp_path):
     deck.write_text("* fill\n.options ambient=96kPa\nPS s 596kPa\nR1 s t 0.566kPa*s/mg\n"
                     "V1 t 54.35mL\n.ic p(t)=200kPag\n.tran 1ms 0.2s\n")
     code = ("import sys; from pneunet.netlist import parse_file; parse_file(sys.argv[1]); "
-            "from pneunet.units import registry; print(registry.cache_info().currsize)")
+            "from pneunet.physics.units import registry; print(registry.cache_info().currsize)")
     out = subprocess.run([sys.executable, "-c", code, str(deck)], capture_output=True, text=True,
                          check=True)
     assert out.stdout.strip() == "0"

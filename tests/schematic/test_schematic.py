@@ -11,11 +11,12 @@ from xml.etree import ElementTree
 import pytest
 
 from pneunet import Circuit
-from pneunet.cli import main
+from pneunet.interfaces.cli import main
 from pneunet.netlist import parse_file, parse_netlist
-from pneunet.paper_circuits import flow_amplifier
-from pneunet.schematic import collapse, draw
-from pneunet.schematic.geometry import Layout
+from pneunet.physics import elements
+from pneunet.design.paper_circuits import flow_amplifier
+from pneunet.interfaces.schematic import collapse, draw
+from pneunet.interfaces.schematic.geometry import Layout
 
 ROOT = Path(__file__).resolve().parents[2]
 NETLISTS = sorted((ROOT / "netlists").glob("*.pn")) + sorted((ROOT / "examples").rglob("*.pn"))
@@ -83,7 +84,7 @@ def test_every_circuit_draws_without_overlaps_and_names_everything(name, boxes):
     top = [i for i in instances if i.depth == 0]
     inside = {n for i in top for n in i.elements}
     pneumatic = {n for e in circuit.elements.values() if e.name not in inside for n, port in
-                 zip(e.nodes, __import__("pneunet").elements.family(e.kind).ports)
+                 zip(e.nodes, elements.family(e.kind).ports)
                  if port not in ("x", "v", "heat", "state") and not circuit.is_reference(n)}
     pneumatic |= {n for i in top for n in i.ports.values() if not circuit.is_reference(n)}
     tubes = {e.name.rpartition(".s")[0] for e in circuit.elements.values() if e.kind == "tube"}

@@ -8,7 +8,7 @@ The recording and the "simulation" are the same stand-alone oscillator curve
 (tests/traces/standalone.py), so the right model times are the recorded times."""
 import numpy as np
 
-from pneunet.traces.align import Alignment
+from pneunet.truth.circuits.align import Alignment
 
 from .standalone import oscillator_record
 

@@ -6,7 +6,7 @@ import re
 import numpy as np
 import pytest
 
-from pneunet.cli import main
+from pneunet.interfaces.cli import main
 
 from .standalone import oscillator_record
 
@@ -72,7 +72,7 @@ def test_json_writer_turns_unbounded_interval_ends_into_null():
 
     import numpy as np
 
-    from pneunet.cli.fit_trace import _finite
+    from pneunet.interfaces.cli.fit_trace import _finite
 
     out = {"fit": {"ci": {"R": (0.5, float("inf")), "V": np.array([1.0, np.nan])}}, "n": 3}
     text = json.dumps(_finite(out), allow_nan=False)

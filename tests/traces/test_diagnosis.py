@@ -24,8 +24,8 @@ import math
 
 import pytest
 
-from pneunet.analysis.circuits import oscillator
-from pneunet.traces import diagnose_trace
+from pneunet.design.circuits import oscillator
+from pneunet.truth.circuits import diagnose_trace
 
 from .standalone import oscillator_record
 
@@ -142,9 +142,9 @@ def test_physics_outside_the_library_is_unexplained(name):
 def test_a_candidate_whose_fit_fails_is_reported_not_a_crash(monkeypatch):
     """A candidate fit that cannot simulate the whole record (SolverError) is a failed
     candidate with the solver's message; the diagnosis still gives its verdict."""
-    from pneunet.errors import SolverError
-    from pneunet.traces import diagnosis as module
-    from pneunet.traces.effects import DeadVolume
+    from pneunet.common.errors import SolverError
+    from pneunet.truth.circuits import diagnosis as module
+    from pneunet.truth.circuits.effects import DeadVolume
 
     def failing(*args, **kwargs):
         raise SolverError("IDA stopped at t = 10 s", time=10.0)

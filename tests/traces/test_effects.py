@@ -4,8 +4,8 @@ inside its bounds, and an effect without ``apply`` cannot be made."""
 import numpy as np
 import pytest
 
-from pneunet.analysis.circuits import oscillator
-from pneunet.traces import CircuitEffect, candidates_for
+from pneunet.design.circuits import oscillator
+from pneunet.truth.circuits import CircuitEffect, candidates_for
 
 BASE = oscillator({"V": 50.0}).tran(3.0, t_step=0.05)
 

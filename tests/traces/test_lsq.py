@@ -1,4 +1,4 @@
-"""Budgeted LM in ln-parameters (truth/lsq.py), checked against scipy's bounded
+"""Budgeted LM in ln-parameters (truth/core/lsq.py), checked against scipy's bounded
 trust-region solver on cheap analytic models: every simulation counts, so no point
 is evaluated twice, and LM that steps past a bound restarts from it and still
 converges in the other parameters."""
@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy import optimize
 
-from pneunet.truth.lsq import least_squares_log
+from pneunet.truth.core.lsq import least_squares_log
 
 T = np.linspace(0.0, 4.0, 60)
 NOISE = 0.01 * np.random.default_rng(7).standard_normal(T.size)

@@ -11,7 +11,7 @@ import pytest
 from scipy.optimize import brentq
 
 from pneunet import Circuit
-from pneunet.traces.initial_state import element_states
+from pneunet.truth.circuits.initial_state import element_states
 
 from .standalone_muscle import MUSCLE, fig12_record, muscle_force
 
@@ -58,7 +58,7 @@ def test_noise_on_the_falling_edge_of_a_midrun_record_adds_no_cycle_start():
     falls slowly through the mid level (1 kPa per sample), where noise made a second
     'cycle start' 4.4 s after the first and the fit compared the wrong cycles (45 kPa
     rms).  Now: one start per cycle, each within 0.03 s of the noise-free record's."""
-    from pneunet.traces.align import Alignment
+    from pneunet.truth.circuits.align import Alignment
 
     clean = fig12_record(t_end=30.0, start=15.4, dt=0.05, noise=0.0, noise_mm=0.0)
     t, p = clean["time_s"].to_numpy(), clean["p_tank_kPa"].to_numpy()
@@ -76,8 +76,8 @@ def test_noise_on_the_falling_edge_of_a_midrun_record_adds_no_cycle_start():
 ])
 def test_a_midrun_rig_recording_fits_to_its_noise_and_covers_the_truth(
         tmp_path, start, dt, noise, noise_mm, damping):
-    from pneunet.analysis.sweep import NetlistBuilder
-    from pneunet.traces.fit import fit_trace
+    from pneunet.netlist.builder import NetlistBuilder
+    from pneunet.truth.circuits.fit import fit_trace
 
     netlist = tmp_path / "rig.pn"
     netlist.write_text(FIG12.read_text().replace("damping=20N*s/m", f"damping={damping}N*s/m"))

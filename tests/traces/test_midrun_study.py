@@ -20,8 +20,8 @@ import functools
 import numpy as np
 import pytest
 
-from pneunet.analysis.sweep import NetlistBuilder
-from pneunet.traces import diagnose_trace
+from pneunet.netlist.builder import NetlistBuilder
+from pneunet.truth.circuits import diagnose_trace
 
 from .standalone import oscillator_record
 from .standalone_driven import amplifier_record

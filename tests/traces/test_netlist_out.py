@@ -1,21 +1,21 @@
-"""The corrected circuit as a netlist (pneunet.traces.netlist_out): the user's netlist
+"""The corrected circuit as a netlist (pneunet.truth.circuits.netlist_out): the user's netlist
 with fitted values and each library effect (and a user's netlist-fragment effect) written
 in simulates what the fit simulated.  No fitting here: the property under test is that
 the written text, parsed and run as ``pneunet run`` runs it, is the circuit the
-:class:`~pneunet.traces.model.TraceModel` builds at those values."""
+:class:`~pneunet.truth.circuits.model.TraceModel` builds at those values."""
 import numpy as np
 import pandas as pd
 import pytest
 
-from pneunet.analysis.sweep import NetlistBuilder
-from pneunet.cli import main
+from pneunet.netlist.builder import NetlistBuilder
+from pneunet.interfaces.cli import main
 from pneunet.netlist import parse_file
 from pneunet.netlist.runner import run_deck
-from pneunet.traces.effects import (DeadVolume, NetlistEffect, PolytropicVolume, Tube,
-                                    VolumeHeatTransfer)
-from pneunet.traces.initial_state import StartState
-from pneunet.traces.model import FIT_OPTIONS, TraceModel, sample_at
-from pneunet.traces.netlist_out import circuit_differences, corrected_netlist
+from pneunet.truth.circuits.effects import (DeadVolume, NetlistEffect, PolytropicVolume, Tube,
+                                            VolumeHeatTransfer)
+from pneunet.truth.circuits.initial_state import StartState
+from pneunet.truth.circuits.model import FIT_OPTIONS, TraceModel, sample_at
+from pneunet.truth.circuits.netlist_out import circuit_differences, corrected_netlist
 
 OSCILLATOR = """\
 * oscillator of the corrected-netlist tests
@@ -160,7 +160,7 @@ def test_driven_record_on_its_own_clock_gets_a_tran_over_it(tmp_path):
 
 
 def test_circuit_built_in_python_is_written_out(tmp_path):
-    from pneunet.analysis.circuits import oscillator
+    from pneunet.design.circuits import oscillator
 
     values = {"Rout": 1.132, "Rvent": 3.0, "V": 50.0, "V_dead@out": 1.5}
     model = TraceModel(oscillator, effects=(DeadVolume("out"),), options=FIT_OPTIONS)
@@ -218,7 +218,7 @@ def test_corrected_netlist_of_a_tank_with_heat_exchange_reproduces_the_recording
     model without it to the second set; both written as netlists and run with ``pneunet
     run``: the corrected one is within 1.5× the noise (0.4 kPa) of the recording on its
     time axis (jump samples left out, as the fit does), the uncorrected one is not."""
-    from pneunet.traces.data import compared_samples
+    from pneunet.truth.circuits.data import compared_samples
 
     from .standalone import oscillator_record
 

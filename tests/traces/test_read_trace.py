@@ -3,8 +3,8 @@ starting late shifted to 0 with a notice, unknown columns refused, thinning."""
 import numpy as np
 import pytest
 
-from pneunet.errors import DataError
-from pneunet.traces import read_trace
+from pneunet.common.errors import DataError
+from pneunet.truth.circuits import read_trace
 
 from .standalone import oscillator_record
 

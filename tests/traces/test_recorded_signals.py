@@ -11,10 +11,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pneunet.cli import main
-from pneunet.errors import DataError
-from pneunet.traces import read_trace
-from pneunet.traces.fit import NOISE_UNIT, residual_scales
+from pneunet.interfaces.cli import main
+from pneunet.common.errors import DataError
+from pneunet.truth.circuits import read_trace
+from pneunet.truth.circuits.fit import NOISE_UNIT, residual_scales
 
 from .standalone_muscle import fig12_record
 
@@ -108,7 +108,7 @@ def test_each_signal_is_weighted_by_its_own_noise():
 def test_per_signal_table_gives_each_floor_and_verdict_in_the_signals_own_unit():
     """The pooled floor is in noise units; the table multiplies back: a contraction whose
     scale is 0.05 mm and whose residual floor is 1.1 noise units has a 0.055 mm floor."""
-    from pneunet.traces.diagnosis import signal_table
+    from pneunet.truth.circuits.diagnosis import signal_table
 
     class Fit:
         scales = {"p_tank": 0.3, "contraction_M1": 0.05}
@@ -158,8 +158,8 @@ def test_sleeve_friction_the_pressures_cannot_see_is_revealed_by_the_encoder():
     nor has the effect library): the pressures alone are at their floor (adequate);
     with the encoder the contraction is far above its floor where the motion reverses
     and the verdict is unexplained, the pressures still at theirs."""
-    from pneunet.analysis.sweep import NetlistBuilder
-    from pneunet.traces import diagnose_trace
+    from pneunet.netlist.builder import NetlistBuilder
+    from pneunet.truth.circuits import diagnose_trace
 
     rec = fig12_record(t_end=40.0, start=12.3, dt=0.05, noise=0.3, noise_mm=0.05, seed=3,
                        friction=0.5)

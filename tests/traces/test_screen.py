@@ -6,12 +6,12 @@ import math
 
 import numpy as np
 
-from pneunet.analysis.circuits import oscillator
+from pneunet.design.circuits import oscillator
 from pneunet.engine.circuit import Circuit
-from pneunet.errors import SolverError
-from pneunet.traces import synthetic_trace
-from pneunet.traces.screen import ScreenTask
-from pneunet.traces.effects import candidates_for
+from pneunet.common.errors import SolverError
+from pneunet.truth.circuits import synthetic_trace
+from pneunet.truth.circuits.screen import ScreenTask
+from pneunet.truth.circuits.effects import candidates_for
 
 BASE = {"Rout": 1.132, "Rvent": 3.0, "V": 50.0}
 NAMES = list(BASE)

@@ -12,11 +12,11 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from pneunet.analysis.circuits import oscillator
-from pneunet.analysis.sweep import NetlistBuilder
-from pneunet.traces import fit_trace, read_trace
-from pneunet.traces.initial_state import choose_start, first_value, sources_vary
-from pneunet.traces.model import TraceModel
+from pneunet.design.circuits import oscillator
+from pneunet.netlist.builder import NetlistBuilder
+from pneunet.truth.circuits import fit_trace, read_trace
+from pneunet.truth.circuits.initial_state import choose_start, first_value, sources_vary
+from pneunet.truth.circuits.model import TraceModel
 
 from .standalone import oscillator_record
 from .standalone_driven import amplifier_record
@@ -88,7 +88,7 @@ def test_sources_vary_only_for_a_driven_circuit():
     assert sources_vary(amp, 0.0, 30.0)
     assert not sources_vary(oscillator({}), 0.0, 30.0)
     c = oscillator({})
-    from pneunet.waveforms import PiecewiseLinear
+    from pneunet.physics.waveforms import PiecewiseLinear
 
     c.elements["PH"].params["value"] = PiecewiseLinear([0.0, 0.5], [96.0, 496.0])
     assert sources_vary(c, 0.0, 30.0) and not sources_vary(c, 8.0, 38.0)
@@ -115,7 +115,7 @@ def test_mid_run_oscillator_fit_covers_the_truth_where_rest_fails():
     # compared from the first cycle start on (the unrecorded states settle before it),
     # and the diagnosis' screen compares the same samples as the fit's Jacobian
     assert 0.0 < fit.extras["compared_from_s"] < 2.0
-    from pneunet.traces.diagnosis import _fit_data
+    from pneunet.truth.circuits.diagnosis import _fit_data
 
     keep = _fit_data(read_trace(rec), (0.0, 6.0), fit)[3]
     assert sum(int(k.sum()) for k in keep.values()) == fit.extras["jacobian"].shape[0]
@@ -155,8 +155,8 @@ def test_driven_recording_from_mid_run_carries_its_unrecorded_states_history():
     the rest state at switch-on driven through 5.23 s of the sources: at the true values
     pneunet reproduces the stand-alone record to 0.1 kPa; the rest state at the first
     sample (the tube settled) is off by more than 10 kPa."""
-    from pneunet.traces.effects import candidates_for
-    from pneunet.traces.initial_state import StartState
+    from pneunet.truth.circuits.effects import candidates_for
+    from pneunet.truth.circuits.initial_state import StartState
 
     rec = amplifier_record(5.23, 6.0, dt=0.01, noise=0.0, seed=5, R_line=0.24, V=30.0,
                            tube_ctrl=(5.0, 5.0))
@@ -179,7 +179,7 @@ def test_driven_recording_from_mid_run_carries_its_unrecorded_states_history():
 
 
 def test_settled_start_is_refused_for_a_driven_circuit():
-    from pneunet.errors import ParameterError
+    from pneunet.common.errors import ParameterError
 
     rec = amplifier_record(5.15, 12.0, dt=0.02, noise=0.3, seed=2)
     model = TraceModel(NetlistBuilder(AMPLIFIER))

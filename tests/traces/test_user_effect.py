@@ -8,10 +8,10 @@ held-out error falls to the noise floor (with a budget of 60 simulations per lea
 stage: the two new parameters trade off against the tank volume)."""
 import pytest
 
-from pneunet.analysis.circuits import oscillator
-from pneunet.errors import TopologyError
-from pneunet.traces import NetlistEffect, candidates_for, diagnose_trace, register
-from pneunet.traces.effects import unregister
+from pneunet.design.circuits import oscillator
+from pneunet.common.errors import TopologyError
+from pneunet.truth.circuits import NetlistEffect, candidates_for, diagnose_trace, register
+from pneunet.truth.circuits.effects import unregister
 
 from .standalone import oscillator_record
 

@@ -16,8 +16,9 @@ ROOT = OUT.parents[2]
 
 
 def branches():
-    from pneunet.analysis.branches import OscillatorSpec, plot_branches, stationary_branches
-    from pneunet.analysis.circuits import oscillator
+    from pneunet.physics.oscillator_branches import (OscillatorSpec, plot_branches,
+                                                     stationary_branches)
+    from pneunet.design.circuits import oscillator
 
     for name, rout in (("branches_rout0.png", 0.0), ("branches_rout2rf.png", 1.132)):
         b = stationary_branches(OscillatorSpec(Rout=rout))
@@ -28,10 +29,10 @@ def branches():
 
 
 def oscillation():
-    from pneunet.analysis.branches import stationary_branches
-    from pneunet.analysis.circuits import oscillator
-    from pneunet.analysis.oscillation import oscillator_period
-    from pneunet.plotting import pyplot, save
+    from pneunet.physics.oscillator_branches import stationary_branches
+    from pneunet.design.circuits import oscillator
+    from pneunet.engine.oscillation import oscillator_period
+    from pneunet.common.plotting import pyplot, save
 
     res = oscillator_period(oscillator(), "tank")
     o, sol = res.oscillation, res.solution
@@ -54,9 +55,9 @@ def oscillation():
 
 
 def tolerance():
-    from pneunet.analysis.circuits import oscillator
-    from pneunet.analysis.sweep import OscillationMeasure, latin_hypercube, run_sweep, tolerance
-    from pneunet.plotting import pyplot, save
+    from pneunet.design.circuits import oscillator
+    from pneunet.design.sweep import OscillationMeasure, latin_hypercube, run_sweep, tolerance
+    from pneunet.common.plotting import pyplot, save
 
     pts = latin_hypercube({"X1.pclose": tolerance(96.42, 5)}, 24, seed=3)
     r = run_sweep(oscillator, pts, OscillationMeasure(), workers=2, progress=False)
@@ -79,7 +80,7 @@ def tolerance():
 
 
 def fill():
-    from pneunet.analysis import design
+    from pneunet.design import sizing as design
 
     V = design.cylinder_volume(173, 20)
     design.plot_fill(V, 0.566, 596, 96, 296, OUT / "fill_time.png", valve="axi")
@@ -89,9 +90,9 @@ def fill():
 
 
 def logic(demux=True):
-    from pneunet.analysis.circuits import nor_gate
-    from pneunet.analysis.logic import demux_expected, plot_truth_table, truth_table
-    from pneunet.analysis.sweep import NetlistBuilder
+    from pneunet.design.circuits import nor_gate
+    from pneunet.design.logic import demux_expected, plot_truth_table, truth_table
+    from pneunet.netlist.builder import NetlistBuilder
 
     tt = truth_table(NetlistBuilder(ROOT / "netlists" / "inverter.pn"), {"in": "Pin"},
                      ["out1", "out2"], expected=lambda b: (1 - b[0], b[0]), t_settle=3)

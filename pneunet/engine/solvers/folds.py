@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...errors import SolverError
+from ...common.errors import SolverError
 
 
 class FoldMonitor:

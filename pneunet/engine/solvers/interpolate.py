@@ -4,7 +4,7 @@ Between two accepted steps (t_k, y_k, ẏ_k) and (t_k+1, y_k+1, ẏ_k+1) the cub
 matching both values and both slopes has an error O(h⁴), below the step's own
 local error for the BDF orders 1–5 at the tolerances pneunet uses, so the output
 grid no longer sets the step size (docs/numerics.md).  Many steps of one solution at
-once: :class:`pneunet.waveforms.SampleTable`.
+once: :class:`pneunet.physics.waveforms.SampleTable`.
 """
 from __future__ import annotations
 

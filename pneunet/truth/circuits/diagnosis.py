@@ -1,0 +1,518 @@
+"""From a recorded circuit trace to the missing physics: the truth-finding pipeline.
+
+1. fit the base model on the first cycles (:func:`~pneunet.truth.circuits.fit.fit_trace`);
+2. the noise floor from the data alone: robust second differences of the residuals
+   over the whole record (:mod:`pneunet.truth.core.noise`), per signal, pooled;
+3. locate the residual of the held-out cycles: which signal, which part of the cycle,
+   and the time shift that best aligns model and recording there;
+4. screen every candidate effect on a grid across its parameter range, the base
+   parameters moved by one Gauss–Newton step each (one simulation per point, points
+   in parallel), fit the most promising ones fully (warm-started at their best point),
+   rank all by their error on the later, held-out cycles;
+5. the verdict (:func:`pneunet.truth.core.verdict.decide`): ``adequate`` (base model at
+   the floor), ``explained`` (the best effect, or it plus the next, brings the held-out
+   error within ``tolerance`` × floor) or ``unexplained`` (and where it sits).
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ...common.errors import SolverError
+from ...common.reprs import Summarized, listed, number
+from ..core.locate import best_lag, hot_phases, phase_profile
+from ..core.noise import difference_sigma, segments
+from ..core.verdict import TOLERANCE, Step, at_floor, decide
+from ..core.waterfall import Waterfall
+from .data import (compared_samples, read_trace, signal_of_column, signal_unit,
+                   split_by_cycles)
+from .effects import candidates_for
+from .fit import TraceFit, fit_trace
+from .model import FIT_OPTIONS, TraceModel
+from .screen import SCREEN_KEEP, screen_candidates
+
+
+@dataclass(repr=False)
+class TraceDiagnosis(Summarized):
+    """Everything :func:`diagnose_trace` found: ``to_json()``, ``report()``, ``plots()``."""
+
+    verdict: str
+    accepted: list
+    noise_floor: float
+    unit: str
+    ranking: list  # of dicts, best first
+    fits: dict  # name -> TraceFit (fitted candidates, 'none' = base)
+    waterfall: Waterfall
+    where: list  # plain-language findings about the remaining residual
+    noise: dict
+    train_window: tuple
+    test_window: tuple
+    timing: dict = field(default_factory=dict)
+    notes: list = field(default_factory=list)
+    signals: dict = field(default_factory=dict)  # per signal, in its unit: signal_table
+
+    def _summary(self):
+        rows = [("accepted", listed(self.accepted) or "nothing"),
+                ("rms residual", number(self.final.error(), self.unit, 3)),
+                ("noise floor", number(self.noise_floor, self.unit, 3)),
+                ("candidates fitted", str(len(self.fits) - 1))]
+        return self.verdict, rows, ".report(), .to_json(), .plots(directory), .final, .fits"
+
+    @property
+    def base(self) -> TraceFit:
+        return self.fits["none"]
+
+    @property
+    def final(self) -> TraceFit:
+        return self.fits.get(" + ".join(self.accepted), self.base) if self.accepted else self.base
+
+    def to_json(self) -> dict:
+        f = self.final
+        return {"verdict": self.verdict, "accepted": list(self.accepted),
+                "noise_floor": _num(self.noise_floor), "rms_unit": self.unit,
+                "start_state": f.start_state.to_json() if f.start_state else None,
+                "ranking": self.ranking, "fit": f.as_dict(),
+                "base_fit": self.base.as_dict(), "waterfall": self.waterfall.to_json(),
+                "where": list(self.where), "noise": self.noise,
+                "train_window": list(self.train_window), "test_window": list(self.test_window),
+                "timing": self.timing, "notes": list(self.notes),
+                "signals": {k: {f: v if f in ("unit", "at_floor") else _num(v)
+                                for f, v in row.items()}
+                            for k, row in self.signals.items()}}
+
+    def report(self) -> str:
+        from .report import format_report
+
+        return format_report(self)
+
+    def plots(self, directory) -> list:
+        from .plots import plot_diagnosis
+
+        return plot_diagnosis(self, directory)
+
+    def corrected_netlist(self) -> str:
+        """The final model (the accepted effects written as elements, the fitted values
+        in) as netlist text (:meth:`TraceFit.corrected_netlist`)."""
+        return self.final.corrected_netlist(
+            verdict=f"{self.verdict}" + (f", accepted {', '.join(self.accepted)}"
+                                         if self.accepted else ", no effect accepted"))
+
+
+def _num(v):
+    return None if v is None or not math.isfinite(float(v)) else float(v)
+
+
+def noise_floor(fit: TraceFit) -> dict:
+    """Noise floor of a fit's residuals over the whole record: per signal, σ from
+    robust second differences within the runs of compared samples; pooled as the rms
+    over signals (in the fit's unit)."""
+    out, pooled = {}, []
+    for s in fit.signals():
+        r = fit.residuals[s].to_numpy() / fit.scales.get(s, 1.0)
+        ok = np.isfinite(r)
+        sigma = difference_sigma(r, segments(ok))
+        out[s] = sigma
+        if math.isfinite(sigma):
+            pooled.append((sigma ** 2, int(ok.sum())))
+    total = sum(w for _, w in pooled)
+    floor = math.sqrt(sum(v * w for v, w in pooled) / total) if total else float("nan")
+    return {"floor": floor, "per_signal": out,
+            "method": "1.4826·MAD of the residuals' second differences / √6, per signal over "
+                      "the whole record (jump samples left out), pooled rms"}
+
+
+def signal_table(base: TraceFit, final: TraceFit, test, noise: dict,
+                 tolerance: float = TOLERANCE) -> dict:
+    """Per signal, in its own unit: the noise floor, the held-out rms of the base and
+    the final model, the final's ratio to the floor and whether that is within
+    ``tolerance`` (the signal's own verdict on the final model)."""
+    held_base, held = base.errors_by_signal(test), final.errors_by_signal(test)
+    out = {}
+    for s in final.signals():
+        floor = noise["per_signal"].get(s, math.nan) * final.scales.get(s, 1.0)
+        out[s] = {"unit": signal_unit(s), "noise_floor": floor, "base_held_out": held_base[s],
+                  "held_out": held[s], "ratio_to_floor": held[s] / floor if floor else math.nan,
+                  "at_floor": bool(at_floor(held[s], floor, tolerance))}
+    return out
+
+
+def locate(fit: TraceFit, test_window, floor: float, data_frame, node: str) -> list[str]:
+    """Plain-language places where ``fit``'s held-out residual exceeds the floor."""
+    r = fit.residuals
+    t = r["time_s"].to_numpy()
+    sel = (t >= test_window[0]) & (t <= test_window[1])
+    findings = []
+    rows = []
+    for s in fit.signals():
+        v = r[s].to_numpy()[sel] / fit.scales.get(s, 1.0)
+        ok = np.isfinite(v)
+        rms = float(np.sqrt(np.mean(v[ok] ** 2))) if ok.any() else float("nan")
+        rows.append((rms, s))
+    rows.sort(reverse=True)
+    col_of = {signal_of_column(c): c for c in data_frame.columns if c != "time_s"}
+    for rms, s in rows:
+        if not rms > TOLERANCE * floor:
+            continue
+        v = r[s].to_numpy() / fit.scales.get(s, 1.0)
+        centre, prof = phase_profile(r["phase"].to_numpy()[sel], v[sel])
+        hot = hot_phases(centre, prof, floor)
+        period = fit.period_measured if math.isfinite(fit.period_measured) else 1.0
+        meas = data_frame[col_of[s]].to_numpy()
+        model = meas + np.nan_to_num(r[s].to_numpy())
+        keep = sel & np.isfinite(r[s].to_numpy())
+        lag = best_lag(t, meas, model, 0.1 * period, keep)
+        where = ", ".join(f"{a:.2f}–{b:.2f}" for a, b in hot) or "spread over the cycle"
+        dt = float(np.median(np.diff(t)))
+        if abs(lag) < 0.5 * dt:
+            shift = "no time shift brings them together there (a shape error)"
+        else:
+            shift = (f"the recording {'lags' if lag > 0 else 'leads'} the model by "
+                     f"{abs(lag):.3g} s there")
+        own = f"{rms * fit.scales.get(s, 1.0):.3g} {signal_unit(s)}".rstrip()
+        findings.append(f"{s}: held-out rms {own} ({rms / floor:.1f}× the noise "
+                        f"floor), largest at cycle phase {where} (0 = rising through mid-range "
+                        f"of p_{node}); {shift}")
+    return findings
+
+
+def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, signals=None,
+                   node: str = "tank", effects=None, train_fraction: float = 0.5,
+                   max_nfev: int = 40, screen: int = 3, tolerance: float = TOLERANCE,
+                   workers: int | None = None, options: dict | None = None,
+                   progress=None, start_state="auto",
+                   time_offset: float | None = None) -> TraceDiagnosis:
+    """Diagnose a circuit recording; see the module docstring.
+
+    ``build``/``params``/``fixed``/``signals``/``node``/``start_state``/``time_offset``
+    as in :func:`~pneunet.truth.circuits.fit.fit_trace` (one start state, chosen for the base
+    fit, serves every fit); ``effects``: candidate effects (kinds,
+    bound effects or their names; default every registered one at every site);
+    ``screen``: how many of the best screened candidates may be fitted fully (the best
+    two, a third within :data:`SCREEN_KEEP` of the best's merit; 4 × ``max_nfev``:
+    they have more parameters and start further away), each from its screen's best
+    point, and when none reaches the floor each again from a second start;
+    ``workers``: processes
+    for parallel finite differences (None: 2 where there are 2 cores); ``progress``:
+    a callable taking a message (e.g. ``print`` to stderr)."""
+    from ...netlist.builder import require_builder
+    from .model import process_pool
+
+    require_builder(build, "diagnose_trace")
+    say = progress or (lambda msg: None)
+    wall = time.perf_counter()
+    df = read_trace(data, signals)
+    where = df.attrs["source"]
+    train, test = split_by_cycles(df, node, train_fraction, where=where)
+    timing = {}
+    pool = process_pool(workers)
+    options = FIT_OPTIONS if options is None else options
+    try:
+        say("base fit")
+        t0 = time.perf_counter()
+        base = fit_trace(build, df, params, fixed=fixed, node=node, window=train,
+                         max_nfev=max_nfev, pool=pool, options=options, where=where,
+                         start_state=start_state, time_offset=time_offset)
+        state = base.start_state
+        say(f"start: {state.describe()}")
+        params = {**params, **{k: v for k, v in state.fitted.items() if k not in params}}
+        timing["base_fit_s"] = time.perf_counter() - t0
+        fits = {"none": base}
+        noise = noise_floor(base)
+        floor = noise["floor"]
+        unit = base.unit
+        base_err = base.error(test)
+        steps = [Step("base model", base_err)]
+        ranking = [_row("none", base, test, floor)]
+        notes = [f"base fit: {base.extras['intervals']['note']}"]
+        circuit = TraceModel(build, fixed, options=options, state=state).circuit(base.values)
+        cand = candidates_for(circuit, effects)
+        verdict, accepted = decide(steps, floor, tolerance)
+        fitting = _Fitting(build, df, params, fixed, node, train, test, base, pool, options,
+                           where, state, floor, tolerance)
+        if verdict != "adequate" and cand:
+            say(f"screening {len(cand)} candidate effects")
+            t0 = time.perf_counter()
+            names = list(params)
+            x_hat = np.log([base.values[k] for k in names])
+            data_fit = _fit_data(df, train, base)
+            n_res = sum(int(v.sum()) for v in data_fit[3].values())
+            typical = base.wall_time_s / max(base.nfev, 1)
+            rows = screen_candidates(cand, names, x_hat, base.extras["jacobian"], params,
+                                     ((build, fixed), {"options": options,
+                                                       "typical_s": typical, "state": state}),
+                                     data_fit, pool)
+            timing["screen_s"] = time.perf_counter() - t0
+            timing["screen_simulations"] = sum(r["simulations"] for r in rows)
+            t0 = time.perf_counter()
+            close = rows[:min(2, screen)] + [r for r in rows[2:screen]
+                                             if r["rss"] <= SCREEN_KEEP * rows[0]["rss"]]
+            for row in close:
+                eff = row["effect"]
+                if not math.isfinite(row["rss"]):
+                    fitting.failed[eff.name] = ("not fitted: the circuit could not be simulated "
+                                                "at any point of its parameter range")
+                    continue
+                say(f"fitting {eff.name}")
+                fit = fitting.start(eff, row["x"], 4 * max_nfev)
+                if fit is not None:
+                    fits[eff.name] = fit
+            # none at the floor: a second start for each fitted one, best first
+            by_error = sorted((n for n in fits if n != "none"), key=lambda n: fits[n].error(test))
+            if not any(at_floor(fits[n].error(test), floor, tolerance) for n in by_error):
+                for row in close:
+                    eff = row["effect"]
+                    if eff.name not in fits and eff.name not in fitting.failed:
+                        continue
+                    say(f"fitting {eff.name} from a second start")
+                    second = {k: _second_start(v, row["x"].get(k))
+                              for k, v in eff.params.items()}
+                    fit = fitting.start(eff, {**fitting.base_start(guesses=True), **second},
+                                        4 * max_nfev)
+                    if fit is not None and (eff.name not in fits or fit.error(test)
+                                            < fits[eff.name].error(test)):
+                        fits[eff.name] = fit
+                        fitting.failed.pop(eff.name, None)
+                    if fit is not None and at_floor(fit.error(test), floor, tolerance):
+                        break
+            timing["candidate_fits_s"] = time.perf_counter() - t0
+            fitted = sorted((n for n in fits if n != "none"), key=lambda n: fits[n].error(test))
+            ranking += [_row(n, fits[n], test, floor, fitting.starts.get(n))
+                        for n in fitted]
+            ranking += [_unfitted_row(r, fitting.failed, n_res) for r in rows
+                        if r["effect"].name not in fits]
+            ranking.sort(key=lambda r: (r["held_out_rms"] is None, r["held_out_rms"] or 0))
+            if fitted:
+                best = fitted[0]
+                steps.append(Step(best, fits[best].error(test), effects=(best,)))
+                # noise floor from the best model too: less misfit leaks into it
+                nb = noise_floor(fits[best])
+                if nb["floor"] < floor:
+                    noise, floor = nb, nb["floor"]
+                    noise["model"] = best
+                    fitting.floor = floor
+                verdict, accepted = decide(steps, floor, tolerance)
+                if verdict == "unexplained" and steps[1].held_out < steps[0].held_out:
+                    t0 = time.perf_counter()
+                    seconds = _second_effects(fits, best, fitted, cand, params, fitting,
+                                              (build, fixed, options, state), df, train, pool,
+                                              say)
+                    _fit_pairs(fits, best, seconds, steps, fitting, 4 * max_nfev, notes, say)
+                    if _needs_both(fits, best, steps, fitting, 4 * max_nfev, say):
+                        ranking = [r if r["effect"] != best else
+                                   _row(best, fits[best], test, floor, fitting.starts.get(best))
+                                   for r in ranking]
+                    timing["second_effect_s"] = time.perf_counter() - t0
+        # the steps' floor ratios may have changed with the floor: decide once more
+        verdict, accepted = decide(steps, floor, tolerance)
+        final = fits[" + ".join(accepted)] if accepted else base
+        where_txt = [] if verdict != "unexplained" else locate(final, test, floor, df, node)
+        if verdict == "unexplained" and not where_txt:
+            where_txt = ["the held-out error is above the floor on every signal by a similar "
+                         "amount (no single place)"]
+        for name in accepted:
+            f = fits[" + ".join(accepted)]
+            at = _at_bound(f, params)
+            if at:
+                notes.append(f"{name}: {at} at its bound")
+    finally:
+        if pool is not None:
+            pool.shutdown()
+    timing["total_s"] = time.perf_counter() - wall
+    # every fit tried, kept or not (the screen's are in screen_simulations)
+    timing["simulations"] = sum(f.extras.get("simulations", 0) for n, f in fits.items()
+                                if n == "none" or " + " in n) \
+        + sum(st["simulations"] or 0 for tried in fitting.starts.values() for st in tried)
+    wf = Waterfall(steps, floor, unit)
+    return TraceDiagnosis(verdict, accepted, floor, unit, ranking, fits, wf, where_txt,
+                          {k: v for k, v in noise.items()}, train, test, timing, notes,
+                          signal_table(base, final, test, noise, tolerance))
+
+
+class _Fitting:
+    """The full fits of candidate effects within one diagnosis (each from given starting
+    values: the screen's best point, or a second start, the effect's own guess or its
+    range's log-middle); pairs started from each single fit's own values."""
+
+    def __init__(self, build, df, params, fixed, node, train, test, base, pool, options,
+                 where, state, floor, tolerance):
+        self.build, self.df, self.params, self.fixed, self.node = build, df, params, fixed, node
+        self.train, self.test, self.base, self.pool, self.options = train, test, base, pool, options
+        self.where, self.state, self.floor, self.tolerance = where, state, floor, tolerance
+        self.failed = {}  # effect name -> why it has no fit
+        self.starts = {}  # effect name -> [{start values, held-out rms, simulations}]
+
+    def _fit(self, effs, x_start, max_nfev):
+        p = {k: (float(np.clip(self.base.values[k], lo, hi)), lo, hi)
+             for k, (_, lo, hi) in self.params.items()}
+        for e in effs:
+            p.update(e.params)
+        x = self.base_start()
+        x.update(x_start)
+        for k in p:
+            x.setdefault(k, p[k][0])
+        return fit_trace(self.build, self.df, p, fixed=self.fixed, node=self.node,
+                         window=self.train, effects=effs, max_nfev=max_nfev, pool=self.pool,
+                         options=self.options, x_start=x, where=self.where,
+                         start_state=self.state)
+
+    def base_start(self, guesses: bool = False) -> dict:
+        """Starting values of the base parameters: the base fit's, except where it
+        stopped at a bound of its range (a base model bent to mimic missing physics),
+        or everywhere with ``guesses``: the user's guesses."""
+        out = {}
+        for k, (guess, lo, hi) in self.params.items():
+            v = self.base.values[k]
+            at_bound = abs(math.log(v / lo)) < 0.01 or abs(math.log(hi / v)) < 0.01
+            out[k] = guess if guesses or at_bound else v
+        return out
+
+    def start(self, eff, x_start, max_nfev) -> TraceFit | None:
+        """The fit of ``eff`` from ``x_start`` (its parameters; the base ones from the
+        base fit's or the screen's); None (and why in ``failed``) when it fails.  Every
+        start is listed in ``starts``."""
+        try:
+            fit = self._fit((eff,), x_start, max_nfev)
+        except SolverError as err:
+            self.failed.setdefault(eff.name, f"fit failed: {err}")
+            return None
+        self.starts.setdefault(eff.name, []).append(
+            {"start": {k: float(x_start[k]) for k in eff.params if k in x_start},
+             "held_out_rms": fit.error(self.test), "simulations": fit.extras.get("simulations")})
+        return fit
+
+    def pair(self, effects, x_start, max_nfev, notes) -> TraceFit | None:
+        """Two effects at once from ``x_start`` (a single fit's own values and the
+        second's start, never values a failed fit left at a bound); None (and why in
+        ``notes``) when it fails."""
+        try:
+            return self._fit(effects, x_start, max_nfev)
+        except SolverError as err:
+            notes.append(f"{' + '.join(e.name for e in effects)}: fit failed: {err}")
+            return None
+
+
+def _second_effects(fits, best, fitted, cand, params, fitting, model_setup, df, train, pool,
+                    say):
+    """Second effects to fit with ``best`` (a single effect that improved on the base
+    model but did not reach the floor), each with its start values: the best of every
+    other candidate screened again on top of ``best``'s fit (an effect the wrong base
+    model hid: its screen ran around a base fit bent to mimic two effects), then the next
+    single fit that did not stop at a bound, started from ``best``'s values."""
+    first = fits[best]
+    build, fixed, options, state = model_setup
+    names = list(first.values)
+    p2 = {**params, **first.effects[0].params}
+    others = [e for e in cand if e.name != best]
+    out = []
+    if others:
+        say(f"screening {len(others)} candidate effects on top of {best}")
+        typical = first.wall_time_s / max(first.nfev, 1)
+        rows = screen_candidates(
+            others, names, np.log([first.values[k] for k in names]), first.extras["jacobian"],
+            p2, ((build, fixed), {"options": options, "typical_s": typical, "state": state}),
+            _fit_data(df, train, first), pool, on_top=first.effects)
+        if math.isfinite(rows[0]["rss"]):
+            out.append((rows[0]["effect"], rows[0]["x"]))
+    usable = [n for n in fitted[1:] if not _at_bound(fits[n], params)]
+    if usable and all(e.name != usable[0] for e, _ in out):
+        e2 = fits[usable[0]].effects[0]
+        out.append((e2, {**first.values, **{k: fits[usable[0]].values[k] for k in e2.params}}))
+    return out
+
+
+def _fit_pairs(fits, best, seconds, steps, fitting, max_nfev, notes, say):
+    """Fit ``best`` with each second effect of ``seconds`` in turn until a pair reaches
+    the floor; the best pair so far is the waterfall's last step."""
+    test, floor, tolerance = fitting.test, fitting.floor, fitting.tolerance
+    for nxt, x_start in seconds:
+        say(f"fitting {best} + {nxt.name}")
+        pair = fitting.pair((fits[best].effects[0], nxt), x_start, max_nfev, notes)
+        name = f"{best} + {nxt.name}"
+        if pair is None or (name in fits and fits[name].error(test) <= pair.error(test)):
+            continue
+        fits[name] = pair
+        if pair.error(test) < steps[-1].held_out:
+            if len(steps) > 2:
+                steps.pop()
+            steps.append(Step(nxt.name, pair.error(test), effects=(best, nxt.name)))
+        if at_floor(pair.error(test), floor, tolerance):
+            break
+
+
+def _needs_both(fits, best, steps, fitting, max_nfev, say) -> bool:
+    """Parsimony: when a pair reached the floor, ``best`` alone again from the pair's
+    values (a single fit that stopped in a wrong valley, a second effect making up for
+    it); True when that single fit is better than ``best``'s first (it replaces it)."""
+    test, floor, tolerance = fitting.test, fitting.floor, fitting.tolerance
+    if len(steps) < 3 or not at_floor(steps[-1].held_out, floor, tolerance):
+        return False
+    pair = fits[" + ".join(steps[-1].effects)]
+    drop = pair.effects[1].params
+    say(f"fitting {best} again from the pair's values")
+    again = fitting.start(pair.effects[0], {k: v for k, v in pair.values.items()
+                                            if k not in drop}, max_nfev)
+    if again is None or again.error(test) >= fits[best].error(test):
+        return False
+    fits[best] = again
+    steps[1] = Step(best, again.error(test), effects=(best,))
+    if at_floor(again.error(test), floor, tolerance):
+        steps.pop()  # the second effect is not needed
+    return True
+
+
+def _second_start(spec, first):
+    """A second starting value of an effect parameter ``spec`` = (guess, low, high):
+    its guess, or when the first start was near it, the log-middle of its range."""
+    guess, lo, hi = spec
+    mid = math.sqrt(lo * hi)
+    if first is None or abs(math.log(first / guess)) > 0.5:
+        return guess
+    return mid
+
+
+def _unfitted_row(row, failed, n_res) -> dict:
+    name = row["effect"].name
+    return {"effect": name, "held_out_rms": None, "fitted": False,
+            "status": "failed" if name in failed else "screened out",
+            "screen_rms": math.sqrt(row["rss"] / n_res) if math.isfinite(row["rss"]) else None,
+            "screen_values": {k: float(v) for k, v in row["x"].items()},
+            "note": failed.get(name, "not fitted: across its parameter range it fits the first "
+                                     "cycles worse than the ones fitted fully")}
+
+
+def _fit_data(df, window, base: TraceFit):
+    """(times, signals, measured, keep, scales) of the fit window, as the base fit."""
+    times = df["time_s"].to_numpy()
+    mask = (times >= window[0]) & (times <= window[1])
+    sigs = base.signals()
+    cols = {signal_of_column(c): c for c in df.columns if c != "time_s"}
+    meas = {s: df[cols[s]].to_numpy() for s in sigs}
+    after = times >= base.extras.get("compared_from_s", 0.0)  # as the base fit compared
+    keep = {s: (compared_samples(meas[s]) & after)[mask] for s in sigs}
+    return (times[mask], sigs, {s: meas[s][mask] for s in sigs}, keep, base.scales,
+            base.extras.get("alignment"))
+
+
+def _row(name, fit: TraceFit, test, floor, starts=None) -> dict:
+    h = fit.error(test)
+    row = {"effect": name, "held_out_rms": h, "ratio_to_floor": h / floor if floor else None,
+           "fitted": True, "status": "fitted", "train_rms": fit.error(),
+           "period_error": fit.period_error,
+           "values": {k: float(v) for k, v in fit.values.items()},
+           "ci": {k: list(v) for k, v in fit.ci.items()}, "nfev": fit.nfev,
+           "converged": fit.success, "message": fit.message}
+    if starts is not None:
+        row["starts"] = starts
+    return row
+
+
+def _at_bound(fit: TraceFit, base_params, tol=0.01) -> str:
+    for e in fit.effects:
+        for k, (_, lo, hi) in e.params.items():
+            v = fit.values[k]
+            if abs(math.log(v / lo)) < tol or abs(math.log(hi / v)) < tol:
+                return f"{k} = {v:.4g}"
+    return ""

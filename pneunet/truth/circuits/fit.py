@@ -1,0 +1,388 @@
+"""Fit a circuit to a recorded transient: least squares through the simulator.
+
+The unknown parameters (e.g. R_out, R_vent and V of the oscillator, and the parameters
+of circuit effects) are varied in log space within bounds until the simulated signals
+match the recorded ones at the recorded times, on a fit window (the first cycles).
+Every recorded column is compared; around the jumps of an algebraic node (p_out at a
+fold) a few samples are left out (:func:`~pneunet.truth.circuits.data.compared_samples`).
+Intervals come from :func:`pneunet.truth.core.intervals.intervals` (white residuals, or a
+sandwich through an AR model of autocorrelated ones, and why).  The solution over the
+whole record gives the held-out error.
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from ...common.errors import DataError, ParameterError, PneunetError
+from ...common.reprs import Summarized, listed, number
+from ..core.intervals import intervals
+from ..core.lsq import least_squares_log
+from ..core.noise import record_sigma, segments
+from .align import Alignment
+from .data import compared_samples, read_trace, signal_of_column, signal_unit, swings
+from .initial_state import StartState, choose_start
+from .model import DIFF_STEP, FIT_OPTIONS, TraceModel, TraceResidual, sample_at
+
+
+@dataclass(repr=False)
+class TraceFit(Summarized):
+    """Result of :func:`fit_trace`.
+
+    ``values``, ``ci`` ({name: (low, high)}), ``stderr_log`` (standard error of ln
+    value), ``rmse`` per signal in the fit window (its own unit, compared samples),
+    ``residuals`` (DataFrame: time_s, phase, fitted, one column per signal, NaN where
+    not compared), ``phase_rms`` (phase bin centre, rms per signal),
+    ``period_measured``/``period_simulated``/``period_error`` (s, at ``node``),
+    ``unit`` ('kPa', or :data:`NOISE_UNIT` for signals of several units) and ``scales``
+    (signal → divisor giving that unit), ``solution`` (the simulation with the
+    estimates over the whole record).
+    """
+
+    values: dict
+    ci: dict
+    stderr_log: dict
+    rmse: dict
+    residuals: object
+    phase_rms: object
+    period_measured: float
+    period_simulated: float
+    period_error: float
+    sigma: float
+    nfev: int
+    success: bool
+    message: str
+    effects: tuple = ()
+    solution: object = None
+    wall_time_s: float = 0.0
+    unit: str = "kPa"
+    scales: dict = field(default_factory=dict)
+    extras: dict = field(default_factory=dict)
+
+    def _summary(self):
+        estimates = (f"{k} {v:.4g} [{self.ci[k][0]:.3g}, {self.ci[k][1]:.3g}]"
+                     for k, v in self.values.items())
+        rows = [("estimates (95 % CI)", listed(estimates, 4)),
+                ("rms residual", number(self.error(), self.unit, 3)),
+                ("period error", number(self.period_error, "s", 3)),
+                ("converged", str(self.success)), ("evaluations", str(self.nfev)),
+                ("wall time", number(self.wall_time_s, "s", 3))]
+        title = " + ".join(e.name for e in self.effects) or "base model"
+        return title, rows, ".values, .ci, .residuals, .solution, .report()"
+
+    def signals(self) -> list[str]:
+        return [c for c in self.residuals.columns if c not in ("time_s", "phase", "fitted")]
+
+    def _in(self, window):
+        """Mask of the residual rows in ``window`` (default: the fit window)."""
+        r = self.residuals
+        if window is None:
+            return r["fitted"].to_numpy()
+        t = r["time_s"].to_numpy()
+        return (t >= window[0]) & (t <= window[1])
+
+    def error(self, window=None) -> float:
+        """Pooled rms of the scaled residuals (in ``unit``) on the compared samples in
+        ``window`` (default: the fit window)."""
+        sel = self._in(window)
+        parts = [self.residuals[s].to_numpy()[sel] / self.scales.get(s, 1.0)
+                 for s in self.signals()]
+        return _rms(np.concatenate(parts))
+
+    def errors_by_signal(self, window=None) -> dict:
+        """{signal: rms residual in the signal's own unit} on the compared samples in
+        ``window`` (default: the fit window)."""
+        sel = self._in(window)
+        return {s: _rms(self.residuals[s].to_numpy()[sel]) for s in self.signals()}
+
+    def as_dict(self) -> dict:
+        return {"values": self.values, "ci": {k: list(v) for k, v in self.ci.items()},
+                "rmse": self.rmse, "period_measured": self.period_measured,
+                "period_simulated": self.period_simulated, "period_error": self.period_error,
+                "sigma": self.sigma, "nfev": self.nfev, "success": self.success,
+                "message": self.message, "effects": [e.name for e in self.effects],
+                "wall_time_s": self.wall_time_s, "unit": self.unit,
+                "start_state": self.start_state.to_json() if self.start_state else None,
+                **{k: v for k, v in self.extras.items()
+                   if k not in ("stage1", "alignment", "jacobian", "start_state", "model")}}
+
+    @property
+    def start_state(self):
+        """The :class:`~pneunet.truth.circuits.initial_state.StartState` the fit used."""
+        return self.extras.get("start_state")
+
+    def corrected_netlist(self, verdict: str | None = None) -> str:
+        """The fitted circuit as netlist text: the user's netlist with the fitted values
+        and the effects written in (:mod:`pneunet.truth.circuits.netlist_out`)."""
+        from .netlist_out import corrected_netlist
+
+        return corrected_netlist(self.extras["model"], self.values, ci=self.ci,
+                                 recording=self.extras.get("recording", ""),
+                                 times=self.residuals["time_s"].to_numpy(), verdict=verdict)
+
+    def report(self) -> str:
+        lines = ["parameter        estimate      95 % CI"]
+        for k, v in self.values.items():
+            lo, hi = self.ci[k]
+            lines.append(f"  {k:<14} {v:>10.5g}   [{lo:.5g}, {hi:.5g}]")
+        lines.append("rms residual: " + ", ".join(f"{k} {v:.3g} {signal_unit(k)}".rstrip()
+                                                  for k, v in self.rmse.items()))
+        if math.isfinite(self.period_error):
+            lines.append(f"period: measured {self.period_measured:.4g} s, simulated "
+                         f"{self.period_simulated:.4g} s, error {self.period_error:+.3g} s")
+        note = self.extras.get("intervals", {}).get("note")
+        if note:
+            lines.append(f"intervals: {note}")
+        if self.start_state is not None:
+            lines.append(f"start: {self.start_state.describe()}")
+        return "\n".join(lines)
+
+
+def _rms(v) -> float:
+    """rms of the finite values of ``v``; NaN when there are none."""
+    v = v[np.isfinite(v)]
+    return float(np.sqrt(np.mean(v ** 2))) if v.size else float("nan")
+
+
+def phase_of(t, y, level=None):
+    """Oscillation phase in [0, 1) of each time from the rising crossings of ``y``."""
+    from ...engine.oscillation import rising_crossings
+    from .data import crossing_band
+
+    if level is None:
+        level = 0.5 * (np.min(y) + np.max(y))
+    rises = rising_crossings(t, y, level, crossing_band(y))
+    phase = np.full(len(t), np.nan)
+    for a, b in zip(rises[:-1], rises[1:]):
+        inside = (t >= a) & (t < b)
+        phase[inside] = (t[inside] - a) / (b - a)
+    return phase
+
+
+def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None, signals=None,
+              node: str | None = None, window=None, effects=(), max_nfev: int = 40,
+              confidence: float = 0.95, phase_bins: int = 20, start: str = "ic",
+              features: bool = True, diff_step: float = DIFF_STEP, options: dict | None = None,
+              pool=None, x_start: dict | None = None, where: str | None = None,
+              align: bool = True, start_state="auto",
+              time_offset: float | None = None) -> TraceFit:
+    """Estimate ``params`` ({name: (guess, low, high)}) so the circuit reproduces ``data``.
+
+    ``build(point) -> Circuit`` (or a :class:`~pneunet.netlist.builder.NetlistBuilder`)
+    with ``fixed`` values for the other parameters; ``signals``: recorded columns to fit
+    (default: all); ``node``: the node whose period is compared (default: the first
+    pressure signal); ``window`` = (t0, t1) the fitted samples; ``effects``: circuit
+    effects added (their parameters may appear in ``params``); ``options``: simulator
+    options (default :data:`~pneunet.truth.circuits.model.FIT_OPTIONS`); ``max_nfev``: cap on
+    the simulations of the least-squares stage (Jacobian included); ``pool``: an
+    executor for the Jacobian's columns; ``x_start``: starting values (skips the
+    cycle stage); ``align``: compare an oscillating record cycle by cycle, each
+    simulated cycle started at its own crossing (:mod:`pneunet.truth.circuits.align`), for a
+    circuit that oscillates on its own (a driven one is compared on the record's time
+    axis); ``start_state``: the circuit's state at the first sample, 'auto', 'rest',
+    'record', 'settled' or a :class:`~pneunet.truth.circuits.initial_state.StartState`
+    (:mod:`pneunet.truth.circuits.initial_state`; fitted initial pressures ``p0@NODE`` join the
+    estimates); ``time_offset``: netlist time of the first sample (s; default: the
+    file's first time stamp for a driven circuit, else 0).
+
+    Two stages: with ``features`` and an oscillating record at ``node``, starting
+    values from the cycle (:mod:`pneunet.truth.circuits.start`); then Levenberg–Marquardt on
+    the samples in ln-parameters.  Signals are compared in kPa when all are pressures,
+    else each in units of its own noise (:func:`residual_scales`).
+    """
+    from ...netlist.builder import require_builder
+    from .start import _feature_fit, initial_values
+
+    require_builder(build, "fit_trace")
+    wall = time.perf_counter()
+    df = read_trace(data, signals)
+    where = where or df.attrs["source"]
+    cols = [c for c in df.columns if c != "time_s"]
+    sigs = [signal_of_column(c) for c in cols]
+    times = df["time_s"].to_numpy()
+    meas = {s: df[c].to_numpy() for s, c in zip(sigs, cols)}
+    mask = np.ones(len(times), bool)
+    if window is not None:
+        mask = (times >= window[0]) & (times <= window[1])
+    if mask.sum() < 5:
+        raise DataError("fewer than 5 samples in the fit window", where=where)
+    for k in params:
+        g, lo, hi = params[k]
+        if not 0 < lo <= g <= hi:
+            raise ParameterError(f"fit parameter {k}: need 0 < low ≤ guess ≤ high, got {params[k]}")
+    model = TraceModel(build, fixed, effects, start, FIT_OPTIONS if options is None else options)
+    guess = {k: v[0] for k, v in params.items()}
+    check_signals(model, guess, cols, where)
+    state = start_state if isinstance(start_state, StartState) else choose_start(
+        model, guess, df, start_state, time_offset, where)
+    model = model.with_state(state)
+    params = {**params, **{k: v for k, v in state.fitted.items() if k not in params}}
+    names = list(params)
+    x0 = np.log([params[k][0] for k in names])
+    lb = np.log([params[k][1] for k in names])
+    ub = np.log([params[k][2] for k in names])
+    keep_all = {s: compared_samples(meas[s]) for s in sigs}
+    unit, scales = residual_scales(meas, keep_all)
+    t_fit = times[mask]
+    node = node or next((s[2:] for s in sigs if s.startswith("p_")), None)
+    aligned = None
+    if align and not state.driven and node and f"p_{node}" in meas:
+        aligned = Alignment.of(times, meas[f"p_{node}"], f"p_{node}")
+    settle_until = settling_time(state, times, meas.get(f"p_{node}"))
+    if settle_until > 0:  # states the record cannot give settle before they are compared
+        keep_all = {s: k & (times >= settle_until) for s, k in keep_all.items()}
+    fun = TraceResidual(model, names, t_fit, sigs, {s: meas[s][mask] for s in sigs},
+                        {s: keep_all[s][mask] for s in sigs}, scales, aligned)
+    stage1 = None
+    if x_start is not None:
+        x0 = np.clip(np.log([x_start.get(k, params[k][0]) for k in names]), lb, ub)
+        stage1 = {"method": "given"}
+    elif features and node and f"p_{node}" in meas and swings(meas[f"p_{node}"][mask]):
+        try:
+            x0, stage1 = initial_values(model, names, x0, lb, ub, t_fit, meas[f"p_{node}"][mask],
+                                        node)
+        except PneunetError as err:
+            stage1 = {"method": "none", "error": str(err)}
+        if stage1 is None or stage1.get("method") == "none":
+            x0, stage1 = _feature_fit(model, names, x0, lb, ub, t_fit, meas[f"p_{node}"][mask],
+                                      node, max_nfev)
+    calls0 = model.calls
+    res = least_squares_log(fun, x0, lb, ub, max_nfev=max_nfev, diff_step=diff_step, pool=pool)
+    est = dict(zip(names, np.exp(res.x)))
+    groups = np.concatenate([np.full(int(fun.keep[s].sum()), i) for i, s in enumerate(sigs)])
+    ci, se, info = intervals(res.x, res.jac, res.fun, names, groups=groups,
+                             confidence=confidence)
+    import pandas as pd
+
+    sim, sol = model.sample(est, times, sigs, aligned)
+    ref = meas[f"p_{node}"] if node and f"p_{node}" in meas else meas[sigs[0]]
+    phase = phase_of(times, ref)
+    resid = {s: np.where(keep_all[s], sim[s] - meas[s], np.nan) for s in sigs}
+    frame = pd.DataFrame({"time_s": times, "phase": phase, "fitted": mask, **resid})
+    rmse = {s: float(np.sqrt(np.nanmean(resid[s][mask] ** 2))) for s in sigs}
+    from ..core.locate import phase_profile
+
+    rows = {"phase": None}
+    for s in sigs:
+        centre, rms = phase_profile(phase[mask], resid[s][mask], phase_bins)
+        rows["phase"], rows[s] = centre, rms
+    phase_rms = pd.DataFrame(rows)
+    pm, ps, perr = period_error(times, ref, sol, node, mask, model.first_time)
+    nfev = calls0 + res.nfev
+    return TraceFit(est, ci, se, rmse, frame, phase_rms, pm, ps, perr, float(info["s"]),
+                    int(nfev), res.success,
+                    res.message + (f"; {fun.failures} failed simulations" if fun.failures else ""),
+                    tuple(effects), sol, time.perf_counter() - wall, unit, scales,
+                    {"stage1": stage1, "simulations": nfev, "intervals": info,
+                     "alignment": aligned, "jacobian": res.jac, "start_state": state,
+                     "model": model, "recording": where,
+                     "compared": {s: int(keep_all[s].sum()) for s in sigs},
+                     "compared_from_s": settle_until})
+
+
+def settling_time(state, times, y) -> float:
+    """Time of the record (s) from which a fit started from the record's state compares
+    it: the first rising mid-level crossing of the cycle node ``y`` (an oscillating
+    record), when the first cycle's unrecorded states — an effect's gas temperature or
+    tube pressure, started at wall temperature or at their neighbours' pressure — have
+    settled; 0 for another start, or a record that does not oscillate."""
+    from .data import oscillates, rising_crossings
+
+    if state.mode != "record" or y is None or not oscillates(times, y):
+        return 0.0
+    return float(rising_crossings(times, y)[0])
+
+
+#: the pooled unit of signals in different units: each signal's residual divided by its
+#: own noise (robust fourth differences of the recorded column)
+NOISE_UNIT = "× noise"
+
+
+def residual_scales(measured: dict, keep: dict) -> tuple[str, dict]:
+    """(unit, {signal: divisor}) of the compared residuals: kPa when every signal is a
+    pressure, else each signal in units of its own noise (σ of its recorded column's
+    fourth differences over the compared runs, :func:`~pneunet.truth.core.noise.record_sigma`;
+    where a column shows none, 1e-6 of its range), so that a contraction in mm and a
+    pressure in kPa weigh as their noise says."""
+    if all(s.startswith("p_") for s in measured):
+        return "kPa", dict.fromkeys(measured, 1.0)
+    scales = {}
+    for s, y in measured.items():
+        sigma = record_sigma(y, segments(keep[s]))
+        floor = 1e-6 * max(float(np.ptp(y)), 1e-12)
+        scales[s] = sigma if math.isfinite(sigma) and sigma > floor else floor
+    return NOISE_UNIT, scales
+
+
+def check_signals(model: TraceModel, values: dict, columns, where: str) -> None:
+    """DataError when a recorded column names a node or element the circuit lacks, or a
+    signal its element does not have (listing the columns ``pneunet run`` would write)."""
+    from ...engine.solution import column_name
+
+    c = model.circuit(values)
+    nodes, elements = set(c.nodes), set(c.elements)
+    others = []
+    for col in columns:
+        sig = signal_of_column(col)
+        if sig.startswith("p_") and sig[2:] not in nodes:
+            raise DataError(f"column {col}: the circuit has no node {sig[2:]!r}", where=where,
+                            hint="nodes: " + ", ".join(sorted(nodes)) + "; rename the column "
+                                 "or leave it out with --signal")
+        if sig.startswith("mdot_") and sig[5:] not in elements:
+            raise DataError(f"column {col}: the circuit has no element {sig[5:]!r}",
+                            where=where, hint="elements: " + ", ".join(sorted(elements)))
+        if not sig.startswith(("p_", "mdot_")):
+            others.append(col)
+    if not others:
+        return
+    import warnings
+
+    with warnings.catch_warnings():  # a probe of a few steps: nothing worth a warning
+        warnings.simplefilter("ignore")
+        sol = c.tran(SIGNAL_PROBE_S)  # which signals the circuit's elements write
+    has = {column_name(k, u) for k, u in sol.units.items()}
+    for col in others:
+        if col not in has:
+            quantity, _, element = signal_of_column(col).partition("_")
+            what = (f"element {element} has no {quantity} signal" if element in elements
+                    else f"the circuit has no element {element!r}")
+            raise DataError(f"column {col}: {what}", where=where,
+                            hint="signals of this circuit besides pressures and flows: "
+                                 + (", ".join(sorted(h for h in has if not h.startswith(
+                                     ("p_", "mdot_")))) or "none"))
+
+
+#: simulated time (s) of the probe that lists a circuit's signals
+SIGNAL_PROBE_S = 1e-3
+
+
+def period_error(times, ref, sol, node, mask, first_time: float = 0.0):
+    """(measured, simulated, simulated − measured) period at ``node`` in ``mask``, s
+    (``first_time``: the netlist time of the first sample)."""
+    from ...engine.oscillation import analyze_oscillation
+    from .data import crossing_band
+    from .start import cycle_features
+
+    w = mask
+    try:
+        m = analyze_oscillation(times[w], ref[w], band=crossing_band(ref[w]))
+        sim_t = sol.t - first_time
+        inside = (sim_t >= times[w][0]) & (sim_t <= times[w][-1])
+        s = analyze_oscillation(sim_t[inside], sol.pressure(node)[inside]) if node else m
+        if m.oscillating and s.oscillating:
+            return m.period_s, s.period_s, s.period_s - m.period_s
+        fm = cycle_features(times[w], ref[w])
+        fs = cycle_features(sim_t[inside], sol.pressure(node)[inside],
+                            fm["levels"] if fm else None) if node else None
+        if fm and fs:
+            return fm["period"], fs["period"], fs["period"] - fm["period"]
+        return m.period_s, s.period_s, float("nan")
+    except PneunetError:
+        return float("nan"), float("nan"), float("nan")
+
+
+__all__ = ["TraceFit", "fit_trace", "phase_of", "period_error", "check_signals", "sample_at"]
