@@ -8,17 +8,9 @@ through the ``pneunet.physics.elements`` entry-point group (each entry point nam
 from __future__ import annotations
 
 from ...common.errors import ParameterError
-from .base import ElementFamily, ElementSpec, FamilyContext, Param
+from .base import _REGISTRY, ElementFamily, ElementSpec, FamilyContext, Param, register
 
-_REGISTRY: dict[str, type[ElementFamily]] = {}
 _LOADED = False
-
-
-def register(family: type[ElementFamily]) -> type[ElementFamily]:
-    """Make an element family known to circuits and netlists (usable as decorator)."""
-    for key in (family.kind, *family.aliases):
-        _REGISTRY[key.lower()] = family
-    return family
 
 
 def _load_builtins() -> None:

@@ -205,3 +205,13 @@ class ElementFamily:
         ``<suffix>_<element>``, e.g. ``mdot_Rout``.
         """
         return {}
+
+
+_REGISTRY: dict[str, type[ElementFamily]] = {}  # kind or alias (lower case) -> family
+
+
+def register(family: type[ElementFamily]) -> type[ElementFamily]:
+    """Make an element family known to circuits and netlists (usable as decorator)."""
+    for key in (family.kind, *family.aliases):
+        _REGISTRY[key.lower()] = family
+    return family

@@ -19,8 +19,8 @@ import numpy as np
 
 from ...common.errors import ParameterError
 from ..laws import signed_root
-from . import register, run_checks
-from .base import ElementFamily, Param
+from . import run_checks
+from .base import ElementFamily, Param, register
 
 _OUT_IN = np.array([1.0, -1.0])  # a flow a→b leaves node a and enters node b
 

@@ -21,8 +21,7 @@ from abc import abstractmethod
 import numpy as np
 
 from ...common.errors import ParameterError
-from . import register
-from .base import ElementSpec, Param
+from .base import ElementSpec, Param, register
 from .cubic_tables import CubicTables
 from .volumes import StorageNode
 

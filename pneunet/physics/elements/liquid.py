@@ -20,8 +20,7 @@ import numpy as np
 
 from ...common.errors import ParameterError
 from ..laws import signed_root
-from . import register
-from .base import ElementFamily, Param
+from .base import ElementFamily, Param, register
 from . import run_checks
 from .resistors import check_line
 

@@ -41,8 +41,7 @@ import numpy as np
 
 from ...common.solver_messages import SolverWarning
 from ...common.errors import ParameterError
-from . import register
-from .base import ElementFamily, ElementSpec, Param
+from .base import ElementFamily, ElementSpec, Param, register
 
 GRAVITY = 9.81             # m/s²
 MAGIC_ANGLE_DEG = np.degrees(np.arccos(1.0 / np.sqrt(3.0)))  # 54.7°: no force at all

@@ -24,9 +24,8 @@ from __future__ import annotations
 import numpy as np
 
 from ...common.errors import ParameterError
-from . import register
 from .cubic_tables import CubicTables
-from .base import ElementFamily
+from .base import ElementFamily, register
 from .elastic import PressureVolumeCurve
 
 TAU = 1e-6  # s, the pull-back of p towards P(V)

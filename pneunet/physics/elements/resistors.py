@@ -5,8 +5,7 @@ import numpy as np
 
 from ..gas import GAS_CONSTANT
 from ..laws import Scalar, quadrature_flow
-from . import register
-from .base import FEW_INSTANCES, ElementFamily, Param
+from .base import ElementFamily, FEW_INSTANCES, Param, register
 
 
 def pipe_resistance(length_mm, diameter_mm, friction, temperature_k, molar_mass_g_mol):

@@ -4,8 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..waveforms import Constant, Pulse, PulseTable, Sampled
-from . import register
-from .base import ElementFamily, Param
+from .base import ElementFamily, Param, register
 
 
 def _waveform_corners(family, t_start, t_stop):

@@ -35,8 +35,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import register
-from .base import ElementFamily, Param
+from .base import ElementFamily, Param, register
 
 
 @register

@@ -28,9 +28,8 @@ import numpy as np
 from ...common.errors import ParameterError
 from ..gas import GAS_CONSTANT
 from ..laws import signed_root
-from . import register
 from .friction import line_flow
-from .base import ElementFamily, ElementSpec, Param
+from .base import ElementFamily, ElementSpec, Param, register
 from .resistors import check_line, pipe_resistance
 
 BLEND = 4.0            # exponent of the smooth minimum of laminar and turbulent flow

@@ -17,8 +17,7 @@ import numpy as np
 from ..laws import Scalar, valve_delta_p, valve_flow_and_partials, valve_opening
 from ...common.errors import ParameterError
 from ..valve_params import ValveParams, resolve_valve_model
-from . import register
-from .base import FEW_INSTANCES, ElementFamily, Param
+from .base import ElementFamily, FEW_INSTANCES, Param, register
 
 _FD_STEP_KPA = 1e-4
 _PORTS = np.array([1.0, -1.0, 0.0])  # flow in→out leaves node in, enters out; none at ctrl

@@ -18,8 +18,7 @@ from abc import ABC, abstractmethod
 import numpy as np
 
 from ...common.errors import ParameterError
-from . import register
-from .base import ElementFamily, Param
+from .base import ElementFamily, Param, register
 
 
 class StorageNode(ElementFamily, ABC):
