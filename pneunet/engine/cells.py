@@ -22,7 +22,6 @@ import numpy as np
 from ..common.errors import ParameterError
 from ..physics.waveforms import Constant
 from .assembly import CircuitDAE
-from .circuit import Circuit
 from .partition import time_dependent
 
 SUBSET_FRACTION = 0.75  # active share of a batch's cells below which a pass evaluates them alone
@@ -43,7 +42,7 @@ class CellBatch:
     """
 
     def __init__(self, circuit, cells, hub_nodes=(), title="cells"):
-        sub = Circuit(title, circuit.options)
+        sub = type(circuit)(title, circuit.options)
         self._boundary_names = []
         for k, cell in enumerate(cells):
             rename = {n: f"{n}@{k}" for n in cell.hub_nodes}

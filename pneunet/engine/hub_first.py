@@ -31,7 +31,6 @@ from ..physics.elements.base import ElementSpec
 from ..common.errors import SolverError
 from ..physics.waveforms import SampleTable, Sampled
 from .assembly import CircuitDAE
-from .circuit import Circuit
 from .multirate import transient as multirate
 from .partition import Partition, partition
 from .single_rate import integrate
@@ -81,7 +80,7 @@ def _integrate_hub(hub, y0, t_start, t_stop):
     return table, hub_dae.node_names, hub_dae.breakpoints(t_start, t_stop), steps
 
 
-def _cells_circuit(circuit, part, table, hub_nodes, corners) -> Circuit:
+def _cells_circuit(circuit, part, table, hub_nodes, corners):
     """The cells' elements and sources, each of the ``hub_nodes`` pinned by a source
     that follows its column of ``table``, with the hub's ``corners`` (s)."""
     cells = circuit.subcircuit(
