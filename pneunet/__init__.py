@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import importlib
 
+from .common import views as _views
+
 __version__ = "0.1.0"
 
 _LAZY = {
@@ -34,6 +36,10 @@ _LAZY = {
 }
 
 __all__ = sorted(_LAZY) + ["__version__"]
+
+# the interfaces stage draws and writes what the engine and the language hold
+_views.provide("schematic", "pneunet.interfaces.schematic", "draw")
+_views.provide("run file", "pneunet.interfaces.runfile", "save_run")
 
 
 def __getattr__(name):

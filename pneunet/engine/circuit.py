@@ -298,9 +298,9 @@ class Circuit:
     def draw(self, path=None, *, results=None):
         """The schematic (:func:`pneunet.interfaces.schematic.draw`), written to ``path`` (.svg, .png,
         .pdf) if given; ``results``: an operating point or ``(solution, t)`` to annotate."""
-        from ..interfaces.schematic import draw
+        from ..common.views import view
 
-        return draw(self, path, results=results)
+        return view("schematic")(self, path, results=results)
 
     def _repr_svg_(self) -> str:
         """Jupyter shows a circuit as its schematic."""

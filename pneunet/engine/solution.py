@@ -204,9 +204,9 @@ class Solution(Summarized):
     def save(self, path, circuit=None):
         """The whole run in one file (``.json`` or ``.npz``) with ``circuit``'s netlist
         and options; :func:`pneunet.read_run` loads it back (see :mod:`pneunet.interfaces.runfile`)."""
-        from ..interfaces.runfile import save_run
+        from ..common.views import view
 
-        return save_run(path, self, circuit)
+        return view("run file")(path, self, circuit)
 
     def plot(self, path=None, signals=None):
         """Pressures (top) and flows (bottom) against time; traces with equal values are

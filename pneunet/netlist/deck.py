@@ -141,10 +141,10 @@ class Deck(Summarized):
     def draw(self, path=None, *, results=None, expand: bool = False):
         """The circuit's schematic (:func:`pneunet.interfaces.schematic.draw`): each subcircuit
         instance a box, or its elements with ``expand=True``."""
-        from ..interfaces.schematic import draw
+        from ..common.views import view
 
-        return draw(self.circuit, path, results=results,
-                    instances=None if expand else self.instances)
+        return view("schematic")(self.circuit, path, results=results,
+                                 instances=None if expand else self.instances)
 
     def _repr_svg_(self) -> str:
         """Jupyter shows a deck as its schematic."""
