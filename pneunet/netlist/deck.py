@@ -117,6 +117,7 @@ class Deck(Summarized):
     overrides: dict = field(default_factory=dict)
     source: Any = None  # the parsed statements, to rebuild variants
     instances: list = field(default_factory=list)
+    elaborator: Any = None  # elaborate(source, overrides) -> Deck, which made this one
 
     def _summary(self):
         rows = [("elements", str(len(self.circuit.elements))),
@@ -159,9 +160,7 @@ class Deck(Summarized):
 
     def variant(self, overrides: dict) -> "Deck":
         """The deck rebuilt with ``.param`` values replaced by ``overrides``."""
-        from .elaborate import elaborate
-
-        return elaborate(self.source, overrides)
+        return self.elaborator(self.source, overrides)
 
     def to_netlist(self) -> str:
         """Netlist text for this deck (flattened circuit, analyses, measurements)."""

@@ -108,7 +108,7 @@ class _Builder(ModelCards, AnalysisStatements, MeasureStatements, WaveformCalls)
                        "write one element per line, e.g. 'P1 supply 400kPa' (docs/netlist.md)")
         deck = Deck(self.circuit, title=self.source.title, file=self.source.file,
                     params=dict(self.scope.values), overrides=dict(self.overrides),
-                    source=self.source, instances=self._instances())
+                    source=self.source, instances=self._instances(), elaborator=elaborate)
         for st in top:
             kw = st.keyword
             if kw == ".tran":
