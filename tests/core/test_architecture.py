@@ -24,7 +24,7 @@ def _importers(prefix):
 
 
 @pytest.mark.parametrize("library, allowed", [
-    ("matplotlib", {"plotting.py"}),
+    ("matplotlib", {"common/plotting.py"}),
     ("sksundae", {"engine/solvers/sundae.py"}),
     ("scikits", {"engine/solvers/odes.py"}),
 ])
