@@ -103,7 +103,7 @@ class _VolumesEffect(CircuitEffect):
 
 
 class PolytropicVolume(_VolumesEffect):
-    """Every volume compresses polytropically with one exponent n."""
+    """Every volume of the netlist compresses polytropically with one exponent n."""
 
     name = "polytropic_volume"
     family = "heat exchange in volumes"
@@ -117,7 +117,8 @@ class PolytropicVolume(_VolumesEffect):
 
 
 class VolumeHeatTransfer(_VolumesEffect):
-    """Every volume with a gas energy balance and wall heat transfer of time constant τ."""
+    """Every volume of the netlist with a gas energy balance and wall heat transfer of time
+    constant τ."""
 
     name = "volume_heat_transfer"
     family = "heat exchange in volumes"
