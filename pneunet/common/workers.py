@@ -121,10 +121,14 @@ def stop(pool) -> None:
     previous = signal.signal(signal.SIGINT, signal.SIG_IGN) if main else None
     try:
         processes = list((getattr(pool, "_processes", None) or {}).values())
-        pool.shutdown(wait=False, cancel_futures=True)
-        for process in processes:
+        for process in processes:  # first: nothing below then waits on a running worker
             if process.is_alive():
                 process.kill()
+        # the executor's own shutdown takes its locks: never let it hold up the stop
+        closer = threading.Thread(target=pool.shutdown, daemon=True, name="pool-stop",
+                                  kwargs={"wait": False, "cancel_futures": True})
+        closer.start()
+        closer.join(timeout=5)
         for process in processes:
             process.join(timeout=5)
         manager = getattr(pool, "_executor_manager_thread", None)

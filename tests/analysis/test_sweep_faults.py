@@ -114,7 +114,8 @@ def test_ctrl_c_stops_at_once_keeping_the_finished_points(tmp_path):
     store = tmp_path / "map.csv.jsonl"
     # the equilibrium at R_out = 0 finishes in about a second, each oscillating point
     # takes well over ten: Ctrl-C must not wait for the running ones
-    proc = subprocess.Popen([sys.executable, "-m", "pneunet", "sweep", "--circuit", "oscillator",
+    proc = subprocess.Popen([sys.executable, "-X", "faulthandler", "-m", "pneunet", "sweep",
+                             "--circuit", "oscillator",
                              "--param", "Rout=list:0,1.1,1.2,1.3,1.4,1.5,1.6,1.7", "--t-stop",
                              "3000", "--workers", "2", "--no-progress", "--out", str(out)],
                             stderr=subprocess.PIPE, text=True, start_new_session=True)
@@ -124,7 +125,11 @@ def test_ctrl_c_stops_at_once_keeping_the_finished_points(tmp_path):
     workers = children(proc.pid)
     os.killpg(proc.pid, signal.SIGINT)  # as a terminal does: the whole process group
     t0 = time.time()
-    err = proc.communicate(timeout=30)[1]
+    try:
+        err = proc.communicate(timeout=30)[1]
+    except subprocess.TimeoutExpired:  # say where it hangs: faulthandler dumps every thread
+        proc.send_signal(signal.SIGABRT)
+        pytest.fail("no exit 30 s after Ctrl-C; its threads:\n" + proc.communicate()[1])
     assert proc.returncode == 130 and time.time() - t0 < 5
     kept = len(lines(store))
     assert err.strip().splitlines() == [
