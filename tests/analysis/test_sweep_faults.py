@@ -109,6 +109,12 @@ def test_sigkill_at_several_moments_then_resume_equals_an_uninterrupted_run(tmp_
     assert again.computed == 0
 
 
+def _as_a_terminal_starts_it():
+    """SIGINT at its default, as for a command typed at a terminal: a suite run as a
+    background job (which ignores SIGINT) would otherwise pass the ignoring on."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def test_ctrl_c_stops_at_once_keeping_the_finished_points(tmp_path):
     out = tmp_path / "map.csv"
     store = tmp_path / "map.csv.jsonl"
@@ -118,7 +124,8 @@ def test_ctrl_c_stops_at_once_keeping_the_finished_points(tmp_path):
                              "--circuit", "oscillator",
                              "--param", "Rout=list:0,1.1,1.2,1.3,1.4,1.5,1.6,1.7", "--t-stop",
                              "3000", "--workers", "2", "--no-progress", "--out", str(out)],
-                            stderr=subprocess.PIPE, text=True, start_new_session=True)
+                            stderr=subprocess.PIPE, text=True, start_new_session=True,
+                            preexec_fn=_as_a_terminal_starts_it)
     deadline = time.time() + 60
     while not lines(store) and time.time() < deadline and proc.poll() is None:
         time.sleep(0.02)
