@@ -355,17 +355,14 @@ def run_sweep(build: Callable, points: Sequence[dict], analysis: Callable | None
             n_workers = run_on_dask(executor, evaluate_point, build, analysis,
                                     [p for _, p in todo], keep_traces, finish)
         else:
-            from concurrent.futures import FIRST_COMPLETED, wait
+            from concurrent.futures import as_completed
 
             n_workers = getattr(executor, "_max_workers", n_workers)
             futures = [executor.submit(evaluate_point, build, analysis, p, keep_traces)
                        for _, p in todo]
-            pending = set(futures)
             try:
-                while pending:  # short waits: see POLL_S
-                    done, pending = wait(pending, timeout=POLL_S, return_when=FIRST_COMPLETED)
-                    for fut in done:
-                        finish(fut.result())
+                for fut in as_completed(futures):
+                    finish(fut.result())
             except BaseException:
                 for f in futures:
                     f.cancel()
@@ -389,12 +386,6 @@ def run_sweep(build: Callable, points: Sequence[dict], analysis: Callable | None
                        wall_time_s=time.perf_counter() - wall, workers=n_workers,
                        with_solver_messages=int((table.get("solver_messages", 0) > 0).sum())
                        if len(table) else 0)
-
-
-#: longest wait (s) for the next finished point: the kernel may deliver a Ctrl-C to
-#: another thread (a pool's queue feeder), and a main thread blocked in one long wait
-#: would not see it until a point finishes, minutes later
-POLL_S = 0.25
 
 
 def records_table(records: list[dict]):
