@@ -300,7 +300,7 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
                                               (build, fixed, options, state), df, train, pool,
                                               say)
                     _fit_pairs(fits, best, seconds, steps, fitting, 4 * max_nfev, notes, say)
-                    if _needs_both(fits, best, steps, fitting, 4 * max_nfev, say):
+                    if _single_refit_from_pair(fits, best, steps, fitting, 4 * max_nfev, say):
                         ranking = [r if r["effect"] != best else
                                    _row(best, fits[best], test, floor, fitting.starts.get(best))
                                    for r in ranking]
@@ -442,7 +442,7 @@ def _fit_pairs(fits, best, seconds, steps, fitting, max_nfev, notes, say):
             break
 
 
-def _needs_both(fits, best, steps, fitting, max_nfev, say) -> bool:
+def _single_refit_from_pair(fits, best, steps, fitting, max_nfev, say) -> bool:
     """Parsimony: when a pair reached the floor, ``best`` alone again from the pair's
     values (a single fit that stopped in a wrong valley, a second effect making up for
     it); True when that single fit is better than ``best``'s first (it replaces it)."""
