@@ -335,8 +335,9 @@ class CircuitDAE:
         for suffix, (unit, values) in fam.signals(t, full_p[:, block.port_node]).items():
             values = np.asarray(values, dtype=float)
             values.setflags(write=False)  # the solution keeps read-only views uncopied
+            undefined = fam.undefined_signals(suffix)
             for k, name in enumerate(fam.names):
-                if not name.startswith("_dead_"):
+                if not name.startswith("_dead_") and k not in undefined:
                     out[f"{suffix}_{name}"] = (unit, values[:, k])
         return out
 

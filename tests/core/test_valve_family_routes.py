@@ -115,6 +115,29 @@ def test_mixed_family_flows_over_a_history_and_its_signals():
     user = [i for i, (m, _) in enumerate(MODELS) if m is USER]
     assert user and np.isnan(sig["dp"][1][user]).all()
     assert np.isnan(sig["opening"][1][user]).all()
+    assert fam.undefined_signals("dp") == fam.undefined_signals("opening") == set(user)
+    assert fam.undefined_signals("mdot") == set()
+
+
+def test_a_users_valve_has_no_dp_in_a_solution_and_asking_says_so():
+    """A solution leaves out what a user-model valve cannot have: reading its dp is an
+    error naming the signals there are, never a column of NaN."""
+    from pneunet import Circuit
+    from pneunet.common.errors import PneunetError
+
+    c = Circuit("user valve", ambient=96.0)
+    c.pressure_source("PS", "s", 300.0)
+    c.pressure_source("PC", "c", 96.0)
+    c.valve("X1", "s", "v", "c", model=USER)
+    c.valve("X2", "s", "v", "c", model="axi")
+    c.volume("V1", "v", V=20.0)
+    sol = c.tran(0.2)
+    assert np.isfinite(sol["mdot_X1"]).all() and sol["mdot_X1"][-1] > 0
+    assert np.isfinite(sol["dp_X2"]).all() and np.isfinite(sol["opening_X2"]).all()
+    for name in ("dp_X1", "opening_X1"):
+        assert name not in sol.signals
+        with pytest.raises(PneunetError, match=name):
+            sol[name]
 
 
 def test_a_small_family_with_a_users_model_is_evaluated_per_valve():

@@ -206,6 +206,11 @@ class ElementFamily:
         """
         return {}
 
+    def undefined_signals(self, suffix: str) -> frozenset[int]:
+        """Instances for which the signal ``suffix`` has no meaning (left out of the
+        solution, so that asking for it is an error rather than a column of NaN)."""
+        return frozenset()
+
 
 _REGISTRY: dict[str, type[ElementFamily]] = {}  # kind or alias (lower case) -> family
 

@@ -121,10 +121,17 @@ class MembraneValve(ElementFamily):
         opening = valve_opening(dp, self._fwd["pclose"], self._fwd["ptrans"])
         return {"mdot": ("mg/s", mdot), "dp": ("kPa", dp), "opening": ("1", opening)}
 
+    def undefined_signals(self, suffix):
+        """A valve following a user's flow model has no membrane parameters: no dp, no
+        opening."""
+        if suffix not in ("dp", "opening"):
+            return frozenset()
+        return frozenset(i for _, idx in self._custom.values() for i in idx)
+
 
 def _param_arrays(params: list[ValveParams | None]) -> dict[str, np.ndarray]:
     """Columns of valve parameters; NaN for a user's model (it has none: its flows are
-    its own, its dp and opening signals undefined)."""
+    its own; its dp and opening are left out of solutions, :meth:`undefined_signals`)."""
     return {k: np.array([getattr(r, k) if r else np.nan for r in params])
             for k in ValveParams.__dataclass_fields__}
 
