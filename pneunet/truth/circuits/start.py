@@ -9,6 +9,7 @@ least-squares fit to the cycle features (period, p_min, p_max, rise fraction).
 """
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -123,6 +124,16 @@ def _roles(model, names, x):
 TURNING_POINT_DS = 10.0
 
 
+@functools.lru_cache(maxsize=256)
+def _branches(spec, ds: float = 5.0):
+    """The stationary branches of ``spec`` (a pure function of it): a screen recentres
+    every grid point of every effect from the same base values, so its R_out searches
+    ask for the same specs again (kept per worker process)."""
+    from ...physics.oscillator_branches import stationary_branches
+
+    return stationary_branches(spec, ds=ds)
+
+
 def initial_values(model, names, x0, lb, ub, t_fit, y_meas, node, iterations: int = 4):
     """Starting values for the oscillator's R_out, R_vent, V from the recorded cycle.
 
@@ -137,8 +148,6 @@ def initial_values(model, names, x0, lb, ub, t_fit, y_meas, node, iterations: in
     import dataclasses
 
     from scipy import optimize
-
-    from ...physics.oscillator_branches import stationary_branches
 
     target = cycle_features(t_fit, y_meas)
     if target is None:
@@ -159,8 +168,8 @@ def initial_values(model, names, x0, lb, ub, t_fit, y_meas, node, iterations: in
 
             def miss(lr):
                 try:
-                    b = stationary_branches(dataclasses.replace(spec, Rout=scale * math.exp(lr)),
-                                            ds=TURNING_POINT_DS)
+                    b = _branches(dataclasses.replace(spec, Rout=scale * math.exp(lr)),
+                                  TURNING_POINT_DS)
                 except PneunetError:
                     return 1e6
                 if b.regime != "oscillation":
@@ -172,7 +181,7 @@ def initial_values(model, names, x0, lb, ub, t_fit, y_meas, node, iterations: in
                                          options={"xatol": 1e-4})
             x[i] = r.x
             spec = dataclasses.replace(spec, Rout=scale * math.exp(x[i]))
-        b = stationary_branches(spec)
+        b = _branches(spec)
         if "Rvent" in roles and b.regime == "oscillation":
             i = roles["Rvent"]
             scale = spec.Rvent / math.exp(x[i])
@@ -186,7 +195,7 @@ def initial_values(model, names, x0, lb, ub, t_fit, y_meas, node, iterations: in
                                          options={"xatol": 1e-4})
             x[i] = r.x
             spec = dataclasses.replace(spec, Rvent=scale * math.exp(x[i]))
-            b = stationary_branches(spec)
+            b = _branches(spec)
         values = dict(zip(names, np.exp(x)))
         try:
             sol = model.simulate(values, float(t_fit[-1]), float(np.median(np.diff(t_fit))))
