@@ -24,6 +24,59 @@ import numpy as np
 
 #: Ljung–Box p-value below which the residuals count as autocorrelated
 WHITE_P = 0.01
+#: a direction of the (ln-)parameter space whose singular value of J is below this
+#: fraction of the largest is not determined by the record: an exact invariance of the
+#: model (a tube's R and volume feeding a dead end: only R·V sets its time constant)
+#: leaves it at round-off, 1e-8 of the largest and below
+UNDETERMINED = 1e-6
+#: a parameter's share of an undetermined direction above which its interval is
+#: unbounded (smaller shares are round-off of the singular vectors)
+UNDETERMINED_SHARE = 1e-3
+
+
+def inverse_normal_matrix(J):
+    """(JᵀJ)⁻¹ from the singular values of J (no squaring of its condition number), and
+    the undetermined directions: unit vectors v with J·v ≈ 0 (:data:`UNDETERMINED`).
+    Along them the variance is infinite, not dropped as a pseudo-inverse would drop it
+    (which gives the parameters on such a direction intervals of zero width)."""
+    _, sv, vt = np.linalg.svd(J, full_matrices=False)
+    free = sv <= UNDETERMINED * (sv[0] if sv.size else 0.0)
+    inv_sq = np.divide(1.0, sv ** 2, out=np.zeros_like(sv), where=~free)
+    cov = (vt.T * inv_sq) @ vt
+    directions = [v for v in vt[free]]
+    for v in directions:
+        hit = np.abs(v) > UNDETERMINED_SHARE
+        cov[hit, :] = cov[:, hit] = 0.0
+        cov[hit, hit] = np.inf
+    return cov, directions
+
+
+def sandwich_of(bread, meat):
+    """bread·meat·bread, with an undetermined direction's infinite variance kept infinite
+    (inf·0 would give NaN)."""
+    with np.errstate(invalid="ignore"):
+        cov = bread @ meat @ bread
+    cov[np.isnan(cov)] = np.inf
+    return cov
+
+
+def undetermined_note(directions, names) -> str:
+    """Plain words for each undetermined direction: which parameters the record cannot
+    tell apart, and the combination it does determine (two parameters: their product
+    or ratio)."""
+    out = []
+    for v in directions:
+        idx = [i for i in np.argsort(-np.abs(v)) if abs(v[i]) > UNDETERMINED_SHARE]
+        who = [names[i] for i in idx]
+        if len(idx) == 2:
+            a, b = who
+            kept = f"{a}·{b}" if v[idx[0]] * v[idx[1]] < 0 else f"{a}/{b}"
+            out.append(f"{a} and {b} are not separately determined by the record, only "
+                       f"{kept} is: their intervals are unbounded")
+        else:
+            out.append(", ".join(who) + " move together without changing the fit (not "
+                       "separately determined): their intervals are unbounded")
+    return "; ".join(out)
 
 
 def ljung_box_p(r, groups=None, lags: int = 10) -> float:
@@ -96,8 +149,7 @@ def sandwich(J, r, groups=None):
         g = K * e[:, None]
         S += g.T @ g
         e2 += float(e @ e)
-    Hinv = np.linalg.pinv(J.T @ J)
-    cov = Hinv @ S @ Hinv * n / max(n - p, 1)
+    cov = sandwich_of(inverse_normal_matrix(J)[0], S) * (n / max(n - p, 1))
     var = sum(float(np.sum((x - x.mean()) ** 2)) for x in rs)
     long_run = e2 / (1.0 - float(a.sum())) ** 2
     dof = n * min(var / long_run, 1.0) if long_run > 0 else float(n)
@@ -113,7 +165,7 @@ def intervals(x, J, r, names, *, groups=None, confidence: float = 0.95, log: boo
 
     n, p = J.shape
     s2 = float(r @ r) / max(n - p, 1)
-    JtJ_inv = np.linalg.pinv(J.T @ J)
+    JtJ_inv, undetermined = inverse_normal_matrix(J)
     se_white = np.sqrt(np.maximum(np.diag(s2 * JtJ_inv), 0))
     p_lb = ljung_box_p(r, groups)
     if not (math.isfinite(p_lb) and p_lb < WHITE_P):
@@ -130,6 +182,11 @@ def intervals(x, J, r, names, *, groups=None, confidence: float = 0.95, log: boo
                         f"correlation {hac['rho1']:.2f}: model error or coloured noise): "
                         f"sandwich intervals through an AR({hac['ar_order']}) of the "
                         "residuals, widened accordingly"}
+    if undetermined:
+        info["undetermined"] = [[names[i] for i in np.flatnonzero(np.abs(v) > UNDETERMINED_SHARE)]
+                                for v in undetermined]
+        info["undetermined_note"] = undetermined_note(undetermined, names)
+        info["note"] += "; " + info["undetermined_note"]
     tq = stats.t.ppf(0.5 + confidence / 2, dof)
     conv = np.exp if log else (lambda v: v)
     with np.errstate(over="ignore"):  # an unbounded end is inf (JSON writers say null)

@@ -46,6 +46,7 @@ import pandas as pd
 from ....common.errors import DataError, ParameterError
 from ....common.reprs import Summarized, listed, number
 from ....physics.valve_params import VALVE_PARAMETERS, ValveParams
+from ...core.intervals import inverse_normal_matrix, sandwich_of
 from .data import PRESSURES, Measurements, as_frame
 from .separation import plane_to_params, separate, smooth_svm
 
@@ -190,7 +191,7 @@ def _stage2_cov(x, y, Rf, pclose, ptrans, e, groups=None):
     base, J = _stage2_jacobian(x, Rf, pclose, ptrans, e)
     r = base - y
     n = len(x)
-    bread = np.linalg.pinv(J.T @ J)
+    bread, _ = inverse_normal_matrix(J)  # an undetermined direction: infinite variance
     score = J * r[:, None]
     if groups is None:
         meat = score.T @ score
@@ -202,7 +203,7 @@ def _stage2_cov(x, y, Rf, pclose, ptrans, e, groups=None):
         g = len(sums)
         meat = sums.T @ sums
         factor = g / max(g - 1, 1) * (n - 1) / max(n - 3, 1)
-    return bread @ meat @ bread * factor
+    return sandwich_of(bread, meat) * factor
 
 
 def _unpack(p, pclose):

@@ -1,0 +1,81 @@
+"""Parameters the record cannot tell apart get unbounded intervals and a note, not
+intervals of zero width (a pseudo-inverse of JᵀJ drops the undetermined direction: a
+driven circuit's control-line tube, fitted at R 0.215 kPa·s/mg and V 116 mL for a true
+5 and 5 mL, had the intervals [0.215, 0.215] and [116, 116]: only R·V sets its time
+constant)."""
+import numpy as np
+import pytest
+
+from pneunet.truth.core.intervals import intervals
+
+T = np.linspace(0.0, 10.0, 400)
+
+
+def _relaxation(lnA, lnR, lnV):
+    """y = A·exp(−t/(R·V)): R and V enter only through their product."""
+    return np.exp(lnA) * np.exp(-T / np.exp(lnR + lnV))
+
+
+def _jacobian(f, x, h=1e-6):
+    """Central differences in ln parameters, written here."""
+    return np.column_stack([(f(*(x + h * e)) - f(*(x - h * e))) / (2 * h)
+                            for e in np.eye(len(x))])
+
+
+def _noise(seed=0):
+    return 0.01 * np.random.default_rng(seed).standard_normal(T.size)
+
+
+def test_a_product_only_the_record_determines_has_unbounded_factors_and_says_so():
+    x = np.log([2.0, 0.5, 4.0])  # τ = R·V = 2 s
+    J = _jacobian(_relaxation, x)
+    r = _noise()
+    ci, se, info = intervals(x, J, r, ["A", "R", "V"])
+    assert ci["R"] == (0.0, np.inf) and ci["V"] == (0.0, np.inf)
+    assert np.isinf(se["R"]) and np.isinf(se["V"])
+    # A is determined: its interval is the ordinary one of the model in (ln A, ln τ)
+    Jr = np.column_stack([J[:, 0], J[:, 1]])  # ∂y/∂ln τ = ∂y/∂ln R
+    s2 = r @ r / (T.size - 3)
+    want = np.sqrt(s2 * np.linalg.inv(Jr.T @ Jr)[0, 0])
+    assert se["A"] == pytest.approx(want, rel=1e-6)
+    assert info["undetermined"] == [["R", "V"]] or info["undetermined"] == [["V", "R"]]
+    assert "not separately determined" in info["note"]
+    assert "R·V" in info["undetermined_note"] or "V·R" in info["undetermined_note"]
+
+
+def test_a_ratio_is_named_as_a_ratio():
+    def f(lnA, lnR, lnV):  # y = A·exp(−t·R/V): only R/V matters
+        return np.exp(lnA) * np.exp(-T * np.exp(lnR - lnV))
+
+    x = np.log([2.0, 1.0, 2.0])
+    _, _, info = intervals(x, _jacobian(f, x), _noise(1), ["A", "R", "V"])
+    assert "R/V" in info["undetermined_note"] or "V/R" in info["undetermined_note"]
+
+
+def test_a_weakly_determined_direction_keeps_its_wide_finite_interval():
+    """Not an invariance: R·V and R separately (a second term that sees R alone, 1e-3
+    of the signal) — the interval is wide but finite, as the formula says."""
+    def f(lnA, lnR, lnV):
+        return _relaxation(lnA, lnR, lnV) + 1e-3 * np.exp(lnR) * T / 10
+
+    x = np.log([2.0, 0.5, 4.0])
+    J = _jacobian(f, x)
+    r = _noise(2)
+    ci, se, info = intervals(x, J, r, ["A", "R", "V"])
+    s2 = r @ r / (T.size - 3)
+    want = np.sqrt(s2 * np.diag(np.linalg.inv(J.T @ J)))
+    np.testing.assert_allclose([se["A"], se["R"], se["V"]], want, rtol=1e-6)
+    assert np.isfinite(se["R"]) and se["R"] > 0.05  # wide: the record barely sees R alone
+    assert "undetermined" not in info
+
+
+def test_the_sandwich_keeps_an_undetermined_direction_unbounded():
+    """Autocorrelated residuals take the sandwich route: the same answer there."""
+    from scipy.signal import lfilter
+
+    x = np.log([2.0, 0.5, 4.0])
+    r = lfilter([1.0], [1.0, -0.9], _noise(3))  # AR(1), ρ = 0.9
+    ci, se, info = intervals(x, _jacobian(_relaxation, x), r, ["A", "R", "V"])
+    assert info["method"] == "hac"
+    assert ci["R"] == (0.0, np.inf) and ci["V"] == (0.0, np.inf)
+    assert np.isfinite(se["A"]) and se["A"] > 0
