@@ -1,5 +1,9 @@
-"""Recordings as a logger makes them, diagnosed whole (issue 31; ``study``: about a minute
-each, ``python -m pytest -m study``, CI runs them).
+"""Recordings as a logger makes them, diagnosed whole (issue 31; one to four minutes each).
+CI runs the ``study`` cases (``python -m pytest -m study``): the new user's recording, the
+clean driven one, heat plus a tube at once (both effects named) and the leak (outside the
+library).  The single effects and the compliant actuator are ``study_long``
+(``python -m pytest -m study_long``; ``benchmarks/study_trace_diagnosis.py --driven`` runs
+the same cases for its table).
 
 * The new user's recording: the oscillator of ``netlists/oscillator.pn`` with R_vent 3.5
   (netlist: 3) and a hidden 3 mL volume at ``out``, 20 Hz, 0.3 kPa noise, the logger
@@ -26,12 +30,11 @@ from pneunet.truth.circuits import diagnose_trace
 from .standalone import oscillator_record
 from .standalone_driven import amplifier_record
 
-pytestmark = pytest.mark.study
-
 DRIVEN_PARAMS = {"Rtube.R": (0.2, 0.02, 2.0), "Amck.V": (25.0, 5.0, 200.0)}
 DRIVEN_TRUTH = {"Rtube.R": 0.24, "Amck.V": 30.0}
 
 
+@pytest.mark.study
 def test_new_users_mid_run_recording_is_explained_by_the_dead_volume(tmp_path):
     rec = oscillator_record(48.0, dt=0.05, noise=0.3, seed=3, V=200.0, Rvent=3.5, V_out=3.0)
     rec = rec[rec["time_s"] >= 8.0 - 1e-9].reset_index(drop=True)
@@ -63,6 +66,7 @@ def driven(case):
                           node="muscle")
 
 
+@pytest.mark.study
 def test_clean_driven_recording_is_adequate_and_covered():
     d = driven(())
     j = d.to_json()
@@ -73,18 +77,23 @@ def test_clean_driven_recording_is_adequate_and_covered():
         assert lo <= truth <= hi, (k, lo, hi)
 
 
+LONG = pytest.mark.study_long
+
+
 @pytest.mark.parametrize("case, expected", [
-    ((("heat_tau", 1.0),), {"volume_heat_transfer"}),
-    ((("V_act", 6.0),), {"dead_volume@act"}),
-    ((("tube_ctrl", (5.0, 5.0)),), {"tube@Xin.ctrl"}),
-    ((("heat_tau", 1.0), ("tube_ctrl", (5.0, 5.0))), {"volume_heat_transfer", "tube@Xin.ctrl"}),
+    pytest.param((("heat_tau", 1.0),), {"volume_heat_transfer"}, marks=LONG),
+    pytest.param((("V_act", 6.0),), {"dead_volume@act"}, marks=LONG),
+    pytest.param((("tube_ctrl", (5.0, 5.0)),), {"tube@Xin.ctrl"}, marks=LONG),
+    pytest.param((("heat_tau", 1.0), ("tube_ctrl", (5.0, 5.0))),
+                 {"volume_heat_transfer", "tube@Xin.ctrl"}, marks=pytest.mark.study),
 ])
 def test_driven_hidden_effect_is_named(case, expected):
     d = driven(case)
     assert d.verdict == "explained" and set(d.accepted) == expected, d.report()
 
 
-@pytest.mark.parametrize("case", [(("leak", 15.0),), (("compliance", 0.004),)])
+@pytest.mark.parametrize("case", [pytest.param((("leak", 15.0),), marks=pytest.mark.study),
+                                  pytest.param((("compliance", 0.004),), marks=LONG)])
 def test_driven_physics_outside_the_library_is_unexplained(case):
     d = driven(case)
     assert d.verdict == "unexplained", d.report()
