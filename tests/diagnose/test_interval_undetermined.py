@@ -5,6 +5,7 @@ driven circuit's control-line tube, fitted at R 0.215 kPa·s/mg and V 116 mL for
 constant)."""
 import numpy as np
 import pytest
+from scipy import stats
 
 from pneunet.truth.core.intervals import intervals
 
@@ -38,9 +39,15 @@ def test_a_product_only_the_record_determines_has_unbounded_factors_and_says_so(
     s2 = r @ r / (T.size - 3)
     want = np.sqrt(s2 * np.linalg.inv(Jr.T @ Jr)[0, 0])
     assert se["A"] == pytest.approx(want, rel=1e-6)
-    assert info["undetermined"] == [["R", "V"]] or info["undetermined"] == [["V", "R"]]
-    assert "not separately determined" in info["note"]
-    assert "R·V" in info["undetermined_note"] or "V·R" in info["undetermined_note"]
+    (combo,) = info["undetermined"]
+    assert sorted(combo["parameters"]) == ["R", "V"]
+    assert combo["combination"] in ("R·V", "V·R")
+    assert "not separately determined" in info["note"] and combo["combination"] in info["note"]
+    # R·V = τ is determined: its value and its ordinary interval in (ln A, ln τ)
+    assert combo["value"] == pytest.approx(2.0, rel=1e-9)
+    se_tau = np.sqrt(s2 * np.linalg.inv(Jr.T @ Jr)[1, 1])
+    lo, hi = combo["ci"]
+    assert np.log(hi / lo) / 2 == pytest.approx(stats.t.ppf(0.975, T.size - 3) * se_tau, rel=1e-6)
 
 
 def test_a_ratio_is_named_as_a_ratio():
@@ -49,7 +56,22 @@ def test_a_ratio_is_named_as_a_ratio():
 
     x = np.log([2.0, 1.0, 2.0])
     _, _, info = intervals(x, _jacobian(f, x), _noise(1), ["A", "R", "V"])
-    assert "R/V" in info["undetermined_note"] or "V/R" in info["undetermined_note"]
+    (combo,) = info["undetermined"]
+    assert combo["combination"] in ("R/V", "V/R")
+    want = 0.5 if combo["combination"] == "R/V" else 2.0
+    assert combo["value"] == pytest.approx(want, rel=1e-9)
+
+
+def test_other_powers_are_written_out():
+    def f(lnA, lnR, lnV):  # y = A·exp(−t/(R·V²)): only R·V² matters
+        return np.exp(lnA) * np.exp(-T / np.exp(lnR + 2 * lnV))
+
+    x = np.log([2.0, 0.5, 2.0])
+    _, _, info = intervals(x, _jacobian(f, x), _noise(4), ["A", "R", "V"])
+    (combo,) = info["undetermined"]
+    assert combo["combination"] in ("V·R^0.5", "R·V^2")
+    want = 2.0 * 0.5 ** 0.5 if combo["combination"] == "V·R^0.5" else 0.5 * 4.0
+    assert combo["value"] == pytest.approx(want, rel=1e-9)
 
 
 def test_a_weakly_determined_direction_keeps_its_wide_finite_interval():
@@ -79,3 +101,6 @@ def test_the_sandwich_keeps_an_undetermined_direction_unbounded():
     assert info["method"] == "hac"
     assert ci["R"] == (0.0, np.inf) and ci["V"] == (0.0, np.inf)
     assert np.isfinite(se["A"]) and se["A"] > 0
+    (combo,) = info["undetermined"]
+    lo, hi = combo["ci"]
+    assert 0 < lo < combo["value"] < hi < np.inf

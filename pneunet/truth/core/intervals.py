@@ -35,20 +35,22 @@ UNDETERMINED_SHARE = 1e-3
 
 
 def inverse_normal_matrix(J):
-    """(JᵀJ)⁻¹ from the singular values of J (no squaring of its condition number), and
-    the undetermined directions: unit vectors v with J·v ≈ 0 (:data:`UNDETERMINED`).
-    Along them the variance is infinite, not dropped as a pseudo-inverse would drop it
-    (which gives the parameters on such a direction intervals of zero width)."""
+    """(JᵀJ)⁻¹ from the singular values of J (no squaring of its condition number), the
+    undetermined directions (unit vectors v with J·v ≈ 0, :data:`UNDETERMINED`) and the
+    inverse on the determined directions alone.  Along an undetermined direction the
+    variance is infinite, not dropped as a pseudo-inverse would drop it (which gives the
+    parameters on it intervals of zero width)."""
     _, sv, vt = np.linalg.svd(J, full_matrices=False)
     free = sv <= UNDETERMINED * (sv[0] if sv.size else 0.0)
     inv_sq = np.divide(1.0, sv ** 2, out=np.zeros_like(sv), where=~free)
-    cov = (vt.T * inv_sq) @ vt
+    determined = (vt.T * inv_sq) @ vt
+    cov = determined.copy()
     directions = [v for v in vt[free]]
     for v in directions:
         hit = np.abs(v) > UNDETERMINED_SHARE
         cov[hit, :] = cov[:, hit] = 0.0
         cov[hit, hit] = np.inf
-    return cov, directions
+    return cov, directions, determined
 
 
 def sandwich_of(bread, meat):
@@ -60,22 +62,46 @@ def sandwich_of(bread, meat):
     return cov
 
 
-def undetermined_note(directions, names) -> str:
-    """Plain words for each undetermined direction: which parameters the record cannot
-    tell apart, and the combination it does determine (two parameters: their product
-    or ratio)."""
+def combinations(directions, names, x, covs, tq, log=True) -> list[dict]:
+    """What the record does determine along each undetermined direction of two
+    parameters: a·b^k (k = −v_a/v_b: the product for k = 1, the ratio for −1) with its
+    value and interval (``covs``: covariances on the determined directions, the widest
+    of them counts, as in :func:`intervals`; ``tq``: the interval's quantile).  Longer
+    directions: only who moves."""
     out = []
     for v in directions:
-        idx = [i for i in np.argsort(-np.abs(v)) if abs(v[i]) > UNDETERMINED_SHARE]
+        idx = [int(i) for i in np.argsort(-np.abs(v)) if abs(v[i]) > UNDETERMINED_SHARE]
         who = [names[i] for i in idx]
-        if len(idx) == 2:
-            a, b = who
-            kept = f"{a}·{b}" if v[idx[0]] * v[idx[1]] < 0 else f"{a}/{b}"
-            out.append(f"{a} and {b} are not separately determined by the record, only "
-                       f"{kept} is: their intervals are unbounded")
+        if len(idx) != 2:
+            out.append({"parameters": who})
+            continue
+        (i, j), (a, b) = idx, who
+        k = -v[i] / v[j]
+        w = np.zeros(len(x))
+        w[i], w[j] = 1.0, k
+        c, se = float(w @ x), math.sqrt(max(max(float(w @ cov @ w) for cov in covs), 0.0))
+        conv = math.exp if log else (lambda u: u)
+        power = "" if abs(abs(k) - 1) < 0.005 else f"^{abs(k):.2g}"
+        expr = f"{a}{'·' if k > 0 else '/'}{b}{power}"
+        out.append({"parameters": who, "combination": expr, "value": conv(c),
+                    "ci": (conv(c - tq * se), conv(c + tq * se))})
+    return out
+
+
+def undetermined_note(combos) -> str:
+    """Plain words for each undetermined direction (:func:`combinations`): which
+    parameters the record cannot tell apart, and what it does determine."""
+    out = []
+    for c in combos:
+        if "combination" in c:
+            a, b = c["parameters"]
+            lo, hi = c["ci"]
+            out.append(f"{a} and {b} are not separately determined by the record (their "
+                       f"intervals are unbounded), only {c['combination']} = "
+                       f"{c['value']:.4g} [{lo:.4g}, {hi:.4g}] is")
         else:
-            out.append(", ".join(who) + " move together without changing the fit (not "
-                       "separately determined): their intervals are unbounded")
+            out.append(", ".join(c["parameters"]) + " move together without changing the "
+                       "fit (not separately determined): their intervals are unbounded")
     return "; ".join(out)
 
 
@@ -129,10 +155,11 @@ def _autoregression(rs, p: int):
     return a, k, rho1
 
 
-def sandwich(J, r, groups=None):
+def sandwich(J, r, groups=None, determined=None):
     """AR-prewhitened sandwich covariance of the parameters and its details (see the
     module doc).  ``groups`` labels the rows by signal; no lag crosses from one signal to
-    the next."""
+    the next.  ``determined``: a (JᵀJ)⁻¹ of the determined directions to use instead
+    (:func:`inverse_normal_matrix`)."""
     from scipy.signal import lfilter
 
     n, p = J.shape
@@ -149,7 +176,8 @@ def sandwich(J, r, groups=None):
         g = K * e[:, None]
         S += g.T @ g
         e2 += float(e @ e)
-    cov = sandwich_of(inverse_normal_matrix(J)[0], S) * (n / max(n - p, 1))
+    bread = inverse_normal_matrix(J)[0] if determined is None else determined
+    cov = sandwich_of(bread, S) * (n / max(n - p, 1))
     var = sum(float(np.sum((x - x.mean()) ** 2)) for x in rs)
     long_run = e2 / (1.0 - float(a.sum())) ** 2
     dof = n * min(var / long_run, 1.0) if long_run > 0 else float(n)
@@ -165,7 +193,7 @@ def intervals(x, J, r, names, *, groups=None, confidence: float = 0.95, log: boo
 
     n, p = J.shape
     s2 = float(r @ r) / max(n - p, 1)
-    JtJ_inv, undetermined = inverse_normal_matrix(J)
+    JtJ_inv, undetermined, determined = inverse_normal_matrix(J)
     se_white = np.sqrt(np.maximum(np.diag(s2 * JtJ_inv), 0))
     p_lb = ljung_box_p(r, groups)
     if not (math.isfinite(p_lb) and p_lb < WHITE_P):
@@ -182,12 +210,13 @@ def intervals(x, J, r, names, *, groups=None, confidence: float = 0.95, log: boo
                         f"correlation {hac['rho1']:.2f}: model error or coloured noise): "
                         f"sandwich intervals through an AR({hac['ar_order']}) of the "
                         "residuals, widened accordingly"}
-    if undetermined:
-        info["undetermined"] = [[names[i] for i in np.flatnonzero(np.abs(v) > UNDETERMINED_SHARE)]
-                                for v in undetermined]
-        info["undetermined_note"] = undetermined_note(undetermined, names)
-        info["note"] += "; " + info["undetermined_note"]
     tq = stats.t.ppf(0.5 + confidence / 2, dof)
+    if undetermined:
+        covs = [s2 * determined] + ([] if info["method"] == "white" else
+                                    [sandwich(J, r, groups, determined)[0]])
+        info["undetermined"] = combinations(undetermined, names, x, covs, tq, log)
+        info["undetermined_note"] = undetermined_note(info["undetermined"])
+        info["note"] += "; " + info["undetermined_note"]
     conv = np.exp if log else (lambda v: v)
     with np.errstate(over="ignore"):  # an unbounded end is inf (JSON writers say null)
         ci = {k: (float(conv(x[i] - tq * se[i])), float(conv(x[i] + tq * se[i])))

@@ -191,7 +191,7 @@ def _stage2_cov(x, y, Rf, pclose, ptrans, e, groups=None):
     base, J = _stage2_jacobian(x, Rf, pclose, ptrans, e)
     r = base - y
     n = len(x)
-    bread, _ = inverse_normal_matrix(J)  # an undetermined direction: infinite variance
+    bread = inverse_normal_matrix(J)[0]  # an undetermined direction: infinite variance
     score = J * r[:, None]
     if groups is None:
         meat = score.T @ score
