@@ -243,3 +243,20 @@ def test_corrected_netlist_of_a_tank_with_heat_exchange_reproduces_the_recording
         rms[name] = float(np.sqrt(np.mean(np.concatenate(parts) ** 2)))
     capfd.readouterr()
     assert rms["corrected"] < 1.5 * 0.4 < rms["base"], rms
+
+
+def test_a_caveat_on_the_values_is_written_and_the_netlist_still_runs(tmp_path):
+    """Parameters the recording does not determine separately (intervals' note) are said
+    in the header, as a comment the parser skips."""
+    path = tmp_path / "osc.pn"
+    path.write_text(OSCILLATOR.format(supply="496kPa"))
+    model = TraceModel(NetlistBuilder(path), effects=(Tube("X1", "ctrl"),), options=FIT_OPTIONS)
+    values = dict(VALUES, **{"R_tube@X1.ctrl": 0.5, "V_tube@X1.ctrl": 4.0})
+    caveat = ("R_tube@X1.ctrl and V_tube@X1.ctrl are not separately determined by the "
+              "record (their intervals are unbounded), only R_tube@X1.ctrl·V_tube@X1.ctrl "
+              "= 2 [1.9, 2.1] is")
+    out = corrected_netlist(model, values, recording="rec.csv", times=TIMES, caveat=caveat)
+    assert f"* caution: {caveat}" in out.splitlines()
+    (tmp_path / "corrected.pn").write_text(out)
+    deck = parse_file(tmp_path / "corrected.pn")
+    assert circuit_differences(deck.circuit, model.circuit(values)) == []

@@ -122,7 +122,9 @@ class TraceFit(Summarized):
 
         return corrected_netlist(self.extras["model"], self.values, ci=self.ci,
                                  recording=self.extras.get("recording", ""),
-                                 times=self.residuals["time_s"].to_numpy(), verdict=verdict)
+                                 times=self.residuals["time_s"].to_numpy(), verdict=verdict,
+                                 caveat=self.extras.get("intervals", {}).get(
+                                     "undetermined_note", ""))
 
     def report(self) -> str:
         lines = ["parameter        estimate      95 % CI"]

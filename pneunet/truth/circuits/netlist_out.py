@@ -26,16 +26,19 @@ UNITS = {"V_dead": "mL", "R_tube": "kPa·s/mg", "V_tube": "mL", "tau": "s", "n":
 
 
 def corrected_netlist(model, values: dict, *, ci: dict | None = None, recording: str = "",
-                      times=None, verdict: str | None = None) -> str:
+                      times=None, verdict: str | None = None, caveat: str = "") -> str:
     """Netlist text of ``model`` (a :class:`~pneunet.truth.circuits.model.TraceModel`) at ``values``.
 
     ``ci`` {name: (low, high)} the 95 % intervals for the comments; ``recording`` its
     name; ``times`` the recording's times (s from its first sample) for the ``.tran``
-    that covers it; ``verdict`` of a diagnosis, for the header."""
+    that covers it; ``verdict`` of a diagnosis, for the header; ``caveat`` a note on
+    the values (parameters the recording does not determine separately)."""
     from ...netlist.builder import NetlistBuilder
 
     target = model.circuit(values)
     notes = _header(model, values, ci or {}, recording, verdict)
+    if caveat:
+        notes.append(f"* caution: {caveat}")
     if isinstance(model.build, NetlistBuilder) and not model.build.options:
         try:
             return _edited(model, values, target, notes, times)
