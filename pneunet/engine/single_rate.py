@@ -90,7 +90,8 @@ def integrate(dae, t_start, t_stop, y, yp, outputs=None, backend=None, progress=
         while t < t_stop:
             next_stop = stops[np.searchsorted(stops, t, side="right")]
             seg = integrator.segment(t, y, yp, next_stop, record.grid_in(t, next_stop),
-                                     restart=restart)
+                                     restart=restart,
+                                     final=next_stop >= t_stop or round(next_stop, 12) in jumps)
             steps += seg.t.size
             restart = False
             status = seg.status

@@ -61,12 +61,16 @@ class Integrator(ABC):
         """Advance towards ``target`` without passing ``tstop``."""
 
     def segment(self, t0: float, y0: np.ndarray, yp0: np.ndarray, t_end: float,
-                outputs: np.ndarray | None = None, restart: bool = True) -> Segment:
+                outputs: np.ndarray | None = None, restart: bool = True,
+                final: bool = False) -> Segment:
         """Integrate from ``t0`` to ``t_end``: restarted at (t0, y0, yp0), or continued
         from where the last segment ended (``restart`` False).
 
         ``outputs`` None stores every internal step; else the rows are the output
         times in (t0, t_end) (the integrator's own interpolation) and the end.
+        ``final``: no segment will continue from this one's end (a restart or the end
+        of the run follows it), so a backend may integrate it in a way it cannot
+        continue from.
         """
         if restart:
             self.init(t0, y0, yp0)

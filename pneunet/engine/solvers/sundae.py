@@ -29,7 +29,7 @@ import sys
 
 import numpy as np
 
-from .base import EVENT, FAILED, OK, TSTOP, Integrator, StepResult
+from .base import EVENT, FAILED, OK, TSTOP, Integrator, Segment, StepResult
 from .sparse_lu import sparse_lu
 
 
@@ -143,6 +143,25 @@ class SundaeIntegrator(Integrator):
         if status == EVENT:
             self._forget_events()
         return StepResult(status, float(r.t), r.y, r.yp, r.message)  # y, yp: fresh copies
+
+    def segment(self, t0, y0, yp0, t_end, outputs=None, restart=True, final=False):
+        """A restarted, final segment storing every step on the dense path is run by
+        scikit-sundae's ``solve``: IDA's same one-step loop to the stop (or a root), in
+        Cython, without a result object per step (an oscillator: 1426 steps, ~10 % less
+        CPU; identical rows).  IDA cannot continue after it (``step`` wants a new
+        ``init_step``), hence ``final``; the sparse path counts steps (REFRESH_STEPS)."""
+        if not (restart and final and outputs is None and self.dense):
+            return super().segment(t0, y0, yp0, t_end, outputs, restart)
+        r = self._solver.solve(np.array([t0, t_end]), y0, yp0)
+        status = _STATUS.get(r.status, FAILED)
+        if status == EVENT:
+            self._forget_events()
+        # row 0 is the start; rows whose t does not pass the previous one's are dropped,
+        # as Integrator.segment does: steps too small to move t, and a failure's row
+        # (it repeats the last good step)
+        t = r.t[1:]
+        keep = np.flatnonzero(np.diff(t, prepend=-np.inf) > 0)
+        return Segment(status, t[keep], r.y[1:][keep], r.yp[1:][keep], r.message)
 
     def _forget_events(self):
         """Empty the roots scikit-sundae keeps on the event function: it turns all of
