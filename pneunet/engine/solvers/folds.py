@@ -97,20 +97,20 @@ class FoldMonitor:
         """
         full = y.copy()
         res, jac, scale = self._system(t, full)
-        dtau = RELAX_TOL * np.min(full[self.alg] * scale / np.maximum(np.abs(res), 1e-300))
+        dtau = RELAX_TOL * (full[self.alg] * scale / np.maximum(np.abs(res), 1e-300)).min()
         for _ in range(RELAX_STEPS):
             ya = full[self.alg]
             rate = -res / scale
             step = _solve(jac, scale, dtau, rate)
             # along the flow (a large Δτ reverses the step where J_aa/s_a < −1/Δτ)
-            if step is not None and np.all(np.abs(step) <= 0.2 * ya) and step @ rate > 0:
+            if step is not None and (np.abs(step) <= 0.2 * ya).all() and step @ rate > 0:
                 trial = full.copy()
                 trial[self.alg] = ya + step
                 res1, jac1, scale1 = self._system(t, trial)
-                err = np.max(0.5 * dtau * np.abs(-res1 / scale1 - rate) / (RELAX_TOL * ya))
-                if np.all(np.isfinite(res1)) and err <= 1.0:
+                err = (0.5 * dtau * np.abs(-res1 / scale1 - rate) / (RELAX_TOL * ya)).max()
+                if np.isfinite(res1).all() and err <= 1.0:
                     full, res, jac, scale = trial, res1, jac1, scale1
-                    if np.max(np.abs(res / scale)) <= 1e-10 * np.max(ya):
+                    if np.abs(res / scale).max() <= 1e-10 * ya.max():
                         return full if self._stable(jac) else None
                     dtau *= min(4.0, 0.9 / np.sqrt(max(err, 1e-6)))
                     continue
@@ -147,8 +147,9 @@ def _solve(jac, scale, dtau, rate):
         matrix.flat[::len(rhs) + 1] += 1.0
         try:
             if len(rhs) == 1:  # one algebraic node: a division, no LAPACK call
-                with np.errstate(divide="ignore", invalid="ignore"):
-                    step = rhs / matrix[0]
+                if not matrix[0, 0]:
+                    return None
+                step = rhs / matrix[0]
             else:
                 step = np.linalg.solve(matrix, rhs)
         except np.linalg.LinAlgError:
@@ -161,7 +162,7 @@ def _solve(jac, scale, dtau, rate):
             step = splu((identity(len(rhs)) + diags(dtau / scale) @ jac).tocsc()).solve(rhs)
         except RuntimeError:
             return None
-    return step if np.all(np.isfinite(step)) else None
+    return step if np.isfinite(step).all() else None
 
 
 def _lu_pivots(jac):
