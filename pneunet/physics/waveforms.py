@@ -10,6 +10,7 @@ SIN(VO VA FREQ TD THETA PHASE).
 """
 from __future__ import annotations
 
+import math
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
 from functools import cached_property
@@ -115,6 +116,21 @@ class PulseTable:
         self._end = rise + width + fall
         self._fall = np.where(fall > 0, fall, _TINY_S)
         self._steps = bool(np.any(rise == 0) or np.any(fall == 0))  # ramps divided by _TINY_S
+        self._rows = list(zip(*(x.reshape(-1).tolist() for x in np.broadcast_arrays(
+            self._delay, self._periodic, self._period, self._step_up, self._rise, self._end,
+            self._fall))))
+
+    def fraction_at(self, t: float) -> list[float]:
+        """:meth:`fraction` of each pulse at one finite time ``t`` (s), on Python floats: the
+        same operations, so the same bits, without numpy's cost per call (~1 µs a pulse,
+        not ~6 µs for all: IDA asks at every new time)."""
+        out = []
+        for delay, periodic, period, step_up, rise, end, fall in self._rows:
+            tau = t - delay
+            if periodic and tau >= 0:
+                tau = math.fmod(tau, period)
+            out.append(max(min((tau + step_up) / rise, (end - tau) / fall, 1.0), 0.0))
+        return out
 
     def fraction(self, t):
         """Fraction 0…1 of each pulse's swing at time ``t`` (s)."""

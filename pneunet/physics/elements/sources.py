@@ -41,6 +41,7 @@ class _WaveformBank:
             entry[2].append(waveforms[i].column)
         self._sampled = [(table, np.array(at), np.array(cols)) for table, at, cols in
                          tables.values()]
+        self.constant = not (self._pulse.size or self._other or self._sampled)
 
     def value(self, t):
         """Values (..., n) at time t (s): a float, or an array of times."""
@@ -48,7 +49,9 @@ class _WaveformBank:
         out = np.empty(t.shape + (self.n,))
         out[..., self._const] = self._level
         if self._pulse.size:
-            out[..., self._pulse] = self._low + self._swing * self._table.fraction(t[..., None])
+            fraction = self._table.fraction(t[..., None]) if t.ndim else \
+                self._table.fraction_at(float(t))
+            out[..., self._pulse] = self._low + self._swing * fraction
         for table, at, cols in self._sampled:
             times = np.broadcast_to(t[..., None], t.shape + cols.shape)
             out[..., at] = table.at(times.ravel(), np.broadcast_to(cols, times.shape).ravel()
@@ -93,7 +96,8 @@ class PressureSource(ElementFamily):
     def pinned_pressure(self, t):
         if np.ndim(t):
             return self._waveforms.value(t)[..., None]
-        if t != self._last_t:  # IDA evaluates several times at one t: evaluate the bank once
+        # IDA evaluates several times at one t: the bank once per t (constants once)
+        if t != self._last_t and (self._last_value is None or not self._waveforms.constant):
             self._last_t, self._last_value = t, self._waveforms.value(t)[:, None]
         return self._last_value
 
