@@ -24,6 +24,9 @@ Run:  python benchmarks/bench_scaling.py [--quick] [--sizes 10,100,1000,3000]
       python benchmarks/bench_scaling.py --schedule independent|groups
           [--sizes 100,300,1000,3000,10000] [--rtol 5e-6] [--single-max 3000] [--repeat 5]
           (multirate against single-rate IDA: benchmarks/scaling_schedules.py)
+      python benchmarks/bench_scaling.py --schedule compare [--sizes 3000] [--repeat 3]
+          (the same cells switched independently against on 8 phase groups, as a user
+          runs them: method auto, alternating fresh processes; issue 35)
 """
 from __future__ import annotations
 
@@ -382,7 +385,7 @@ def main(argv=None):
                     help="largest N with a tight-tolerance pneunet reference (rtol 1e-9)")
     ap.add_argument("--oscillator", action="store_true",
                     help="also time the small oscillator as whole processes")
-    ap.add_argument("--schedule", choices=("independent", "groups"),
+    ap.add_argument("--schedule", choices=("independent", "groups", "compare"),
                     help="compare the multirate method with single-rate IDA on this control "
                          "schedule (issue 18) instead")
     ap.add_argument("--single-max", type=int, default=3000,
@@ -392,6 +395,11 @@ def main(argv=None):
     ap.add_argument("--repeat", type=int, default=1,
                     help="with --schedule: multirate runs per N (median shown)")
     args = ap.parse_args(argv)
+    if args.schedule == "compare":  # issue 35 item 3: independent against groups, N cells
+        from scaling_schedules import compare
+
+        return compare(int(args.sizes.split(",")[-1]) if args.sizes else 3000,
+                       args.rtol or 5e-6, args.repeat if args.repeat > 1 else 3)
     if args.schedule:
         from scaling_schedules import study
 

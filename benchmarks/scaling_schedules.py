@@ -116,6 +116,27 @@ def study(sizes, schedule, rtol, single_max, reference_max, repeat=1):
     return rows
 
 
+def compare(n, rtol, repeat=3):
+    """Issue 35, item 3: the same ``n`` cells switched independently against on 8 phase
+    groups, each as a user runs it (``method`` auto), fresh processes alternating so that
+    both see the machine's same drift; prints the medians and their ratio."""
+    walls = {"independent": [], "groups": []}
+    methods = {}
+    for _ in range(repeat):
+        for schedule in walls:
+            r = measure(n, schedule, "auto", rtol)
+            walls[schedule].append(r["wall"])
+            methods[schedule] = r["method"]
+    med = {k: float(np.median(v)) for k, v in walls.items()}
+    print(f"N = {n}, {T_STOP:g} s, rtol {rtol:g}, method auto, {repeat} alternating fresh "
+          f"processes each (load average {os.getloadavg()[0]:.1f})")
+    for k, v in walls.items():
+        print(f"  {k:<12} {methods[k]:<10} median {med[k]:6.2f} s  runs "
+              + " / ".join(f"{w:.2f}" for w in v))
+    print(f"  independent / groups = {med['independent'] / med['groups']:.2f} (target ≤ 1.5)")
+    return med
+
+
 if __name__ == "__main__" and sys.argv[1:2] == ["--one"]:
     n, schedule, method, rtol, atol, save = sys.argv[2:8]
     one(int(n), schedule, method, float(rtol), float(atol), save)
