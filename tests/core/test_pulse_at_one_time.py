@@ -62,3 +62,16 @@ def test_a_source_follows_its_waveform_from_one_time_to_the_next():
         source = PressureSource(specs, FamilyContext(SimulationOptions()))
         for t in (0.0, 0.0, 0.505, 0.505, 1.3, 12.0, 0.2):  # IDA repeats and steps back
             assert source.pinned_pressure(t)[:, 0].tolist() == [w.value(t) for w in waves]
+
+
+def test_a_large_bank_at_one_time_is_its_waveforms_too():
+    """Above FLOAT_PULSES pulses one time goes through numpy (the float loop cost a
+    3,000-cell transient 8.1 → 12.8 s): the same values."""
+    from pneunet.physics.elements.sources import FLOAT_PULSES
+
+    waves = [Pulse(96.0, 400.0, 0.2 + 0.25 * k, 0.05, 0.05, 2.0, 4.0)
+             for k in range(FLOAT_PULSES + 4)] + [Constant(101.3)]
+    bank = _WaveformBank(waves)
+    for t in (0.0, 0.23, 1.3, 2.31, 5.51, 12.0):
+        assert bank.value(t).tolist() == pytest.approx([w.value(t) for w in waves],
+                                                        rel=1e-15, abs=1e-12)
