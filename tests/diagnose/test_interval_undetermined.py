@@ -104,3 +104,18 @@ def test_the_sandwich_keeps_an_undetermined_direction_unbounded():
     (combo,) = info["undetermined"]
     lo, hi = combo["ci"]
     assert 0 < lo < combo["value"] < hi < np.inf
+
+
+def test_a_valve_diagnosis_effect_fit_says_the_same():
+    """The valve diagnosis' effect fits (truth/valves/diagnose) dropped such a direction
+    too (singular values below 1e-10 of the largest left out)."""
+    from pneunet.truth.valves.diagnose.fitting import _stderr
+
+    x = np.log([2.0, 0.5, 4.0])
+    J = _jacobian(_relaxation, x)
+    r = _noise(5)
+    se = _stderr(J, r, T.size, 3)
+    assert np.isinf(se[1]) and np.isinf(se[2])
+    Jr = J[:, :2]
+    want = np.sqrt(r @ r / (T.size - 3) * np.linalg.inv(Jr.T @ Jr)[0, 0])
+    assert se[0] == pytest.approx(want, rel=1e-6)

@@ -160,17 +160,19 @@ def fit_model(frame: pd.DataFrame, start: ValveModel, *, inputs=None, mdot_min=1
 
 
 def _stderr(jac, r, n, k):
-    jac = np.asarray(jac)
+    """s·√diag((JᵀJ)⁻¹); a direction the Jacobian cannot see gives its parameters an
+    infinite standard error (dropping it, as a truncated pseudo-inverse does, gives them
+    a made-up small one)."""
+    from ...core.intervals import inverse_normal_matrix
+
     s2 = float(r @ r) / max(n - k, 1)
     try:
-        u, sv, vt = np.linalg.svd(jac, full_matrices=False)
-        keep = sv > sv[0] * 1e-10
-        cov = (vt[keep].T / sv[keep] ** 2) @ vt[keep] * s2
-        se = np.sqrt(np.maximum(np.diag(cov), 0.0))
-        se[~np.isfinite(se)] = np.inf
-        return se
+        cov = inverse_normal_matrix(np.asarray(jac))[0] * s2
     except np.linalg.LinAlgError:
         return np.full(k, np.inf)
+    se = np.sqrt(np.maximum(np.diag(cov), 0.0))
+    se[~np.isfinite(se)] = np.inf
+    return se
 
 
 @dataclass
