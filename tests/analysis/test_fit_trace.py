@@ -62,3 +62,21 @@ def test_trace_format_is_checked(tmp_path, trace):
     assert list(read_trace(good).columns) == ["time_s", "p_tank_kPa"]
     train, test = split_by_cycles(good, "tank")
     assert train[0] == 0 and train[1] == test[0] < test[1] == pytest.approx(5.0)
+
+
+def test_a_parameter_stopped_at_its_bound_is_said_so(trace):
+    """R_vent's range made to exclude the truth (3.0): the fit stops at 2.5 and the
+    report says that its interval means nothing there; with the truth inside, no note."""
+    fixed = {"Rout": 1.132, "V": 50.0}
+    f = fit_trace(oscillator, trace, {"Rvent": (2.0, 0.5, 2.5)}, fixed=fixed, node="tank",
+                  max_nfev=12, features=False)
+    assert f.values["Rvent"] == pytest.approx(2.5, rel=1e-6)
+    (name, side, _), = f.extras["intervals"]["at_bound"]
+    assert (name, side) == ("Rvent", "upper")
+    assert "Rvent stopped at its upper bound 2.5" in f.report()
+    assert "* caution: Rvent stopped at its upper bound 2.5" in f.corrected_netlist()
+    free = fit_trace(oscillator, trace, {"Rvent": (2.0, 0.5, 20.0)}, fixed=fixed,
+                     node="tank", max_nfev=12, features=False)
+    assert free.values["Rvent"] == pytest.approx(3.0, rel=0.01)
+    assert "at_bound" not in free.extras["intervals"]
+    assert "bound" not in free.report() and "caution" not in free.corrected_netlist()

@@ -123,8 +123,9 @@ class TraceFit(Summarized):
         return corrected_netlist(self.extras["model"], self.values, ci=self.ci,
                                  recording=self.extras.get("recording", ""),
                                  times=self.residuals["time_s"].to_numpy(), verdict=verdict,
-                                 caveat=self.extras.get("intervals", {}).get(
-                                     "undetermined_note", ""))
+                                 caveat="; ".join(
+                                     self.extras.get("intervals", {}).get(k, "") for k in
+                                     ("undetermined_note", "at_bound_note")).strip("; "))
 
     def report(self) -> str:
         lines = ["parameter        estimate      95 % CI"]
@@ -258,6 +259,14 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
     groups = np.concatenate([np.full(int(fun.keep[s].sum()), i) for i, s in enumerate(sigs)])
     ci, se, info = intervals(res.x, res.jac, res.fun, names, groups=groups,
                              confidence=confidence)
+    bounded = at_bounds(names, res.x, lb, ub)
+    if bounded:
+        info["at_bound"] = bounded
+        info["at_bound_note"] = "; ".join(
+            f"{k} stopped at its {side} bound {np.exp(v):.4g} (the recording wants it beyond "
+            "the range given, or the model lacks something): its interval is not a "
+            "confidence interval" for k, side, v in bounded)
+        info["note"] += "; " + info["at_bound_note"]
     import pandas as pd
 
     sim, sol = model.sample(est, times, sigs, aligned)
@@ -284,6 +293,13 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
                      "model": model, "recording": where,
                      "compared": {s: int(keep_all[s].sum()) for s in sigs},
                      "compared_from_s": settle_until})
+
+
+def at_bounds(names, x, lb, ub, tol: float = 0.01) -> list[tuple]:
+    """(name, 'lower'/'upper', ln bound) of each parameter within ``tol`` (in ln value,
+    1 %) of a bound of its range."""
+    return [(k, side, b) for k, v, lo, hi in zip(names, x, lb, ub)
+            for side, b in (("lower", lo), ("upper", hi)) if abs(v - b) < tol]
 
 
 def settling_time(state, times, y) -> float:
