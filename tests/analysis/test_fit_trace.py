@@ -71,8 +71,8 @@ def test_a_parameter_stopped_at_its_bound_is_said_so(trace):
     f = fit_trace(oscillator, trace, {"Rvent": (2.0, 0.5, 2.5)}, fixed=fixed, node="tank",
                   max_nfev=12, features=False)
     assert f.values["Rvent"] == pytest.approx(2.5, rel=1e-6)
-    (name, side, _), = f.extras["intervals"]["at_bound"]
-    assert (name, side) == ("Rvent", "upper")
+    (name, side, bound), = f.extras["intervals"]["at_bound"]
+    assert (name, side) == ("Rvent", "upper") and bound == pytest.approx(2.5, rel=1e-12)
     assert "Rvent stopped at its upper bound 2.5" in f.report()
     assert "* caution: Rvent stopped at its upper bound 2.5" in f.corrected_netlist()
     free = fit_trace(oscillator, trace, {"Rvent": (2.0, 0.5, 20.0)}, fixed=fixed,

@@ -263,7 +263,7 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
     if bounded:
         info["at_bound"] = bounded
         info["at_bound_note"] = "; ".join(
-            f"{k} stopped at its {side} bound {np.exp(v):.4g} (the recording wants it beyond "
+            f"{k} stopped at its {side} bound {v:.4g} (the recording wants it beyond "
             "the range given, or the model lacks something): its interval is not a "
             "confidence interval" for k, side, v in bounded)
         info["note"] += "; " + info["at_bound_note"]
@@ -296,9 +296,9 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
 
 
 def at_bounds(names, x, lb, ub, tol: float = 0.01) -> list[tuple]:
-    """(name, 'lower'/'upper', ln bound) of each parameter within ``tol`` (in ln value,
-    1 %) of a bound of its range."""
-    return [(k, side, b) for k, v, lo, hi in zip(names, x, lb, ub)
+    """(name, 'lower'/'upper', bound) of each parameter within ``tol`` (in ln value, 1 %)
+    of a bound of its range; ``x``, ``lb``, ``ub`` are ln values, the bound is not."""
+    return [(k, side, float(np.exp(b))) for k, v, lo, hi in zip(names, x, lb, ub)
             for side, b in (("lower", lo), ("upper", hi)) if abs(v - b) < tol]
 
 
