@@ -30,7 +30,7 @@ from ..core.waterfall import Waterfall
 from .data import (compared_samples, read_trace, signal_of_column, signal_unit,
                    split_by_cycles)
 from .effects import candidates_for
-from .fit import TraceFit, fit_trace
+from .fit import TraceFit, fit_trace, near_bound
 from .model import FIT_OPTIONS, TraceModel
 from .screen import SCREEN_KEEP, screen_candidates
 
@@ -316,7 +316,7 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
                          "amount (no single place)"]
         for name in accepted:
             f = fits[" + ".join(accepted)]
-            at = _at_bound(f, params)
+            at = _at_bound(f)
             if at:
                 notes.append(f"{name}: {at} at its bound")
     finally:
@@ -367,8 +367,7 @@ class _Fitting:
         out = {}
         for k, (guess, lo, hi) in self.params.items():
             v = self.base.values[k]
-            at_bound = abs(math.log(v / lo)) < 0.01 or abs(math.log(hi / v)) < 0.01
-            out[k] = guess if guesses or at_bound else v
+            out[k] = guess if guesses or near_bound(v, lo, hi) else v
         return out
 
     def start(self, eff, x_start, max_nfev) -> TraceFit | None:
@@ -418,7 +417,7 @@ def _second_effects(fits, best, fitted, cand, params, fitting, model_setup, df, 
             _fit_data(df, train, first), pool, on_top=first.effects)
         if math.isfinite(rows[0]["rss"]):
             out.append((rows[0]["effect"], rows[0]["x"]))
-    usable = [n for n in fitted[1:] if not _at_bound(fits[n], params)]
+    usable = [n for n in fitted[1:] if not _at_bound(fits[n])]
     if usable and all(e.name != usable[0] for e, _ in out):
         e2 = fits[usable[0]].effects[0]
         out.append((e2, {**first.values, **{k: fits[usable[0]].values[k] for k in e2.params}}))
@@ -511,10 +510,11 @@ def _row(name, fit: TraceFit, test, floor, starts=None) -> dict:
     return row
 
 
-def _at_bound(fit: TraceFit, base_params, tol=0.01) -> str:
+def _at_bound(fit: TraceFit) -> str:
+    """'k = value' of the first of the fit's effect parameters that stopped at a bound of
+    its range, or ''."""
     for e in fit.effects:
         for k, (_, lo, hi) in e.params.items():
-            v = fit.values[k]
-            if abs(math.log(v / lo)) < tol or abs(math.log(hi / v)) < tol:
-                return f"{k} = {v:.4g}"
+            if near_bound(fit.values[k], lo, hi):
+                return f"{k} = {fit.values[k]:.4g}"
     return ""

@@ -295,11 +295,27 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
                      "compared_from_s": settle_until})
 
 
-def at_bounds(names, x, lb, ub, tol: float = 0.01) -> list[tuple]:
-    """(name, 'lower'/'upper', bound) of each parameter within ``tol`` (in ln value, 1 %)
-    of a bound of its range; ``x``, ``lb``, ``ub`` are ln values, the bound is not."""
-    return [(k, side, float(np.exp(b))) for k, v, lo, hi in zip(names, x, lb, ub)
-            for side, b in (("lower", lo), ("upper", hi)) if abs(v - b) < tol]
+#: a fitted value this close to a bound of its range (in ln value: 1 %) stopped there
+BOUND_TOL = 0.01
+
+
+def near_bound(v: float, lo: float, hi: float) -> str:
+    """'lower' or 'upper' when ``v`` lies within :data:`BOUND_TOL` of that bound of
+    (``lo``, ``hi``), else ''."""
+    if abs(math.log(v / lo)) < BOUND_TOL:
+        return "lower"
+    return "upper" if abs(math.log(hi / v)) < BOUND_TOL else ""
+
+
+def at_bounds(names, x, lb, ub) -> list[tuple]:
+    """(name, 'lower'/'upper', bound) of each parameter that stopped at a bound of its
+    range (:func:`near_bound`); ``x``, ``lb``, ``ub`` are ln values, the bound is not."""
+    out = []
+    for k, v, lo, hi in zip(names, np.exp(x), np.exp(lb), np.exp(ub)):
+        side = near_bound(v, lo, hi)
+        if side:
+            out.append((k, side, float(lo if side == "lower" else hi)))
+    return out
 
 
 def settling_time(state, times, y) -> float:
