@@ -196,13 +196,16 @@ def intervals(x, J, r, names, *, groups=None, confidence: float = 0.95, log: boo
     JtJ_inv, undetermined, determined = inverse_normal_matrix(J)
     se_white = np.sqrt(np.maximum(np.diag(s2 * JtJ_inv), 0))
     p_lb = ljung_box_p(r, groups)
+    covs = [s2 * determined]  # on the determined directions (their combinations' intervals)
     if not (math.isfinite(p_lb) and p_lb < WHITE_P):
         se, dof = se_white, max(n - p, 1)
         info = {"method": "white", "ljung_box_p": p_lb,
                 "note": f"residuals white (Ljung–Box p = {p_lb:.2g}): ordinary linearised "
                         "intervals"}
     else:
-        cov, hac = sandwich(J, r, groups)
+        cov, hac = sandwich(J, r, groups, determined)
+        covs.append(cov)
+        # an undetermined direction's infinite variance comes in through se_white
         se = np.maximum(np.sqrt(np.maximum(np.diag(cov), 0)), se_white)
         dof = max(hac["dof_eff"] - p, 1.0)
         info = {"method": "hac", "ljung_box_p": p_lb, **hac,
@@ -212,8 +215,6 @@ def intervals(x, J, r, names, *, groups=None, confidence: float = 0.95, log: boo
                         "residuals, widened accordingly"}
     tq = stats.t.ppf(0.5 + confidence / 2, dof)
     if undetermined:
-        covs = [s2 * determined] + ([] if info["method"] == "white" else
-                                    [sandwich(J, r, groups, determined)[0]])
         info["undetermined"] = combinations(undetermined, names, x, covs, tq, log)
         info["undetermined_note"] = undetermined_note(info["undetermined"])
         info["note"] += "; " + info["undetermined_note"]
