@@ -124,6 +124,12 @@ def stop(pool) -> None:
         for process in processes:  # first: nothing below then waits on a running worker
             if process.is_alive():
                 process.kill()
+        # the executor's manager thread sees the dead workers, fails every pending future
+        # and ends; only then its shutdown (a future cancelled before that makes the
+        # manager's set_exception raise InvalidStateError on Python 3.11: a traceback)
+        manager = getattr(pool, "_executor_manager_thread", None)
+        if manager is not None:  # else the interpreter waits for it at exit
+            manager.join(timeout=5)
         # the executor's own shutdown takes its locks: never let it hold up the stop
         closer = threading.Thread(target=pool.shutdown, daemon=True, name="pool-stop",
                                   kwargs={"wait": False, "cancel_futures": True})
@@ -131,9 +137,6 @@ def stop(pool) -> None:
         closer.join(timeout=5)
         for process in processes:
             process.join(timeout=5)
-        manager = getattr(pool, "_executor_manager_thread", None)
-        if manager is not None:  # else the interpreter waits for it at exit
-            manager.join(timeout=5)
     finally:
         if main:
             signal.signal(signal.SIGINT, previous)

@@ -364,8 +364,9 @@ def run_sweep(build: Callable, points: Sequence[dict], analysis: Callable | None
                 for fut in as_completed(futures):
                     finish(fut.result())
             except BaseException:
-                for f in futures:
-                    f.cancel()
+                if own_pool is None:  # our own pool is stopped below, which fails them
+                    for f in futures:
+                        f.cancel()
                 raise
         finished_all = True
     finally:
