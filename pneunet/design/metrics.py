@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import math
 
-from .sweep import DeckMeasure
+from .cycles import steady_transient
+from .sweep import DeckMeasure, measured
 from ..netlist.builder import NetlistBuilder
 from ..common.errors import ParameterError
 
@@ -40,21 +41,26 @@ class SpecMeasure(DeckMeasure):
     """The sweep analysis of a specification: ``{target.key: value}`` for every target.
 
     ``builder``: a :class:`NetlistBuilder` (its analyses and ``.meas`` run) or None (a
-    Python builder: ``t_stop`` s of transient); ``node``: default node of built-ins.
+    Python builder: ``t_stop`` s of transient); ``node``: default node of built-ins;
+    ``steady``: a circuit with constant sources is simulated until its cycle repeats and
+    the rest of the transient is that cycle again (:mod:`~pneunet.design.cycles`; False:
+    the whole transient is integrated).
     """
 
     def __init__(self, targets, builder: NetlistBuilder | None = None, node: str | None = None,
-                 t_stop: float | None = None):
+                 t_stop: float | None = None, steady: bool = True):
         super().__init__(builder)
         self.targets, self.node, self.t_stop = list(targets), node, t_stop
+        self.steady = steady
 
     def __call__(self, circuit, point=None):
         if self.builder is not None:
-            meas, sol = super().__call__(circuit, point)
+            meas, sol = self._run_deck(circuit, point)
         else:
             if not self.t_stop:
                 raise ParameterError("a design of a Python-built circuit needs t_stop (s)")
-            meas, sol = {}, circuit.tran(self.t_stop)
+            sol = steady_transient(circuit, self.t_stop) if self.steady else None
+            meas, sol = {}, sol or circuit.tran(self.t_stop)
         out, by_node = {}, {}
         for target in self.targets:
             if target.source == "meas":
@@ -68,6 +74,21 @@ class SpecMeasure(DeckMeasure):
                 by_node[node] = builtin_metrics(sol.t, sol.pressure(node))
             out[target.key] = by_node[node][target.metric]
         return out, sol
+
+    def _run_deck(self, circuit, point):
+        """The netlist's ``.meas`` values and its transient; a deck of one ``.tran`` on
+        its steady cycle when ``steady`` (the whole deck run otherwise)."""
+        from ..netlist.deck import Tran
+        from ..netlist.runner import evaluate_measures
+
+        deck = self.builder.deck(point)
+        if self.steady and len(deck.analyses) == 1 and isinstance(deck.analyses[0], Tran):
+            tran = deck.analyses[0]
+            sol = steady_transient(circuit, tran.t_stop, tran.t_step, tran.t_start,
+                                   deck.source.limits.max_output_points)
+            if sol is not None:
+                return measured(*evaluate_measures(deck.measures, [(tran, sol)])), sol
+        return super().__call__(circuit, point)
 
     def __repr__(self):
         return f"SpecMeasure({[t.text for t in self.targets]})"

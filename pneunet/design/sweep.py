@@ -215,10 +215,16 @@ class DeckMeasure:
         deck.circuit = circuit
         result = run_deck(deck)
         sol = next((r for a, r in result.results if hasattr(r, "pressure")), None)
-        out = {k: (float(v) if v is not None else float("nan")) for k, v in result.measures.items()}
-        if result.failures:
-            out["meas_failures"] = json.dumps(result.failures)
-        return out, sol
+        return measured(result.measures, result.failures), sol
+
+
+def measured(values: dict, failures: dict) -> dict:
+    """A sweep row's measurements: ``.meas`` values (NaN where not measured) and, if any
+    failed, ``meas_failures`` (JSON of their reasons)."""
+    out = {k: (float(v) if v is not None else float("nan")) for k, v in values.items()}
+    if failures:
+        out["meas_failures"] = json.dumps(failures)
+    return out
 
 
 # -- running --------------------------------------------------------------------------

@@ -62,38 +62,57 @@ def name_hint(name, known, what) -> str:
     return f"did you mean {close[0]!r}?" if close else f"{what}: " + ", ".join(known)
 
 
+#: sources loaded in this process by unpickled builders (a sweep's points sent to a
+#: worker), by the token of the builder they copy: the file is parsed once per worker and
+#: builder, not once per point; the last LOADED_KEPT builders' are kept
+_LOADED: dict = {}
+LOADED_KEPT = 4
+
+
 class NetlistBuilder:
     """``build(point)`` for a netlist: plain names override ``.param`` values, dotted
     names set element parameters.  The file (and its includes) is read and parsed once
     per builder and process (:func:`pneunet.netlist.load_file`), elaborated per point:
-    a fit's trial points cost no parsing."""
+    a fit's trial points and a sweep's points cost no parsing."""
 
     def __init__(self, path, parse: dict | None = None, **options):
+        import uuid
+
         self.path = str(path)
         self.parse = dict(parse or {})  # parse_file's limits and include_path
         self.options = options
         self._source = None
+        self._token = uuid.uuid4().hex  # the same in every pickled copy
 
-    def __getstate__(self):  # workers parse for themselves
-        return {**self.__dict__, "_source": None}
+    def __getstate__(self):  # workers parse for themselves, once (_LOADED)
+        return {**self.__dict__, "_source": None, "_copy": True}
 
-    def __call__(self, point: dict):
-        from . import elaborate_source, load_file
+    def _loaded(self):
+        from . import load_file
 
         if self._source is None:
-            self._source = load_file(self.path, **self.parse)
-        deck = elaborate_source(self._source,
-                                {k: v for k, v in point.items() if "." not in k})
-        circuit = apply_overrides(deck.circuit, point)
+            copy = self.__dict__.get("_copy", False)
+            self._source = (_LOADED.get(self._token) if copy else None) or \
+                load_file(self.path, **self.parse)
+            if copy and self._token not in _LOADED:
+                _LOADED[self._token] = self._source
+                for token in list(_LOADED)[:-LOADED_KEPT]:
+                    del _LOADED[token]
+        return self._source
+
+    def __call__(self, point: dict):
+        circuit = apply_overrides(self.deck(point).circuit, point)
         if self.options:
             circuit.options = circuit.options.replace(**self.options)
         return circuit
 
     def deck(self, point: dict | None = None):
-        from . import parse_file
+        """The netlist's :class:`~pneunet.netlist.deck.Deck` with ``point``'s ``.param``
+        values (its circuit without the dotted names set)."""
+        from . import elaborate_source
 
-        return parse_file(self.path, overrides={k: v for k, v in (point or {}).items()
-                                                if "." not in k}, **self.parse)
+        return elaborate_source(self._loaded(), {k: v for k, v in (point or {}).items()
+                                                 if "." not in k})
 
     def __repr__(self):
         return f"NetlistBuilder({self.path!r})"
