@@ -19,6 +19,7 @@ import numpy as np
 
 from ..physics import elements
 from ..physics.elements.base import ElementSpec, FamilyContext
+from .float_plan import FloatAlgebraicBlock, FloatPlan, on_floats
 
 
 def _cat(arrays) -> np.ndarray:
@@ -138,6 +139,7 @@ class CircuitDAE:
         self._partial_buffer = np.zeros(self._partial_to.size)
         # families with no port at an unknown node (pressure sources) add nothing
         self._active = [b for b in blocks if b.free_flat.size]
+        self._floats = FloatPlan(self) if on_floats(b.family for b in self._active) else None
         # pressures and rates of all nodes at one time, refilled in place
         self._p = np.empty(self.n + len(self.fixed_names))
         self._p[self._reference_idx] = self.options.ambient
@@ -194,8 +196,11 @@ class CircuitDAE:
     def evaluate(self, t, y, ydot, cj=None):
         """Residual F(t, y, ẏ); with ``cj`` also the CSC data of ∂F/∂y + cj·∂F/∂ẏ.
 
-        Contributions of all families are summed by one bincount each.
+        Contributions of all families are summed by one bincount each (on Python
+        floats for a small circuit: :mod:`~pneunet.engine.float_plan`).
         """
+        if self._floats is not None:
+            return self._floats.evaluate(t, y, ydot, cj)
         p, pdot = self._pressures_at(t, y, ydot)
         flows, partials = self._flow_buffer, self._partial_buffer
         for block in self._active:
@@ -416,9 +421,16 @@ class AlgebraicBlock:
         cols = _cat(c for _, c in pair_to)
         self._rows = rows
         keys, self._pair_to = np.unique(cols * na + rows, return_inverse=True)
+        self._floats = None
         if self.dense:
             self._pair_to = rows * na + cols  # row-major position in the dense block
             self._n_entries = na * na
+            if on_floats(part[0] for part in self._parts):
+                self._floats = FloatAlgebraicBlock(dae, [
+                    (fam, nodes, list(zip(flow_at.tolist(), to.tolist())),
+                     list(zip(pair_at.tolist(), (r * na + c).tolist(), r.tolist())))
+                    for (fam, nodes, flow_at, pair_at, *_), to, (r, c)
+                    in zip(self._parts, flow_to, pair_to)], na)
         else:
             from scipy.sparse import csc_matrix
 
@@ -430,6 +442,8 @@ class AlgebraicBlock:
     def evaluate(self, t, y, residual=True):
         """(F_a or None, J_aa, s_a): s_a the row scale Σ|contribution| of each algebraic
         equation over its algebraic columns (mg/(s·kPa)), floored at 1e-300."""
+        if self._floats is not None:
+            return self._floats.evaluate(t, y, residual)
         p, _ = self.dae._pressures_at(t, y)
         flows, partials = self._flows, self._partials
         for fam, nodes, flow_at, pair_at, zeros, flow_slice, pair_slice in self._parts:

@@ -27,15 +27,28 @@ class _QuadratureFamily(ElementFamily):
 
     ports = ("a", "b")
 
-    def _scalar_laws(self, p, partials):
-        """Each instance's (ṁ, ∂ṁ/∂p_a, ∂ṁ/∂p_b) on Python floats (laws.Scalar), p (n, 2)."""
+    def __init__(self, specs, context):
+        super().__init__(specs, context)
+        self.on_floats = self.n <= FEW_INSTANCES
+        self._own_rows = np.arange(2 * self.n).reshape(self.n, 2).tolist()  # p (n, 2) raveled
+
+    def _scalar_laws(self, p, rows, partials):
+        """Each instance's (ṁ, ∂ṁ/∂p_a, ∂ṁ/∂p_b) on Python floats (laws.Scalar): ``p`` a
+        list of pressures, ``rows`` each instance's indices of its (a, b) in it."""
         band = self.context.options.flow_band
-        return [quadrature_flow(p_a, p_b, r, band, partials, xp=Scalar)
-                for (p_a, p_b), r in zip(p.tolist(), self._r_floats)]
+        return [quadrature_flow(p[a], p[b], r, band, partials, xp=Scalar)
+                for (a, b), r in zip(rows, self._r_floats)]
+
+    def float_outflows(self, t, p, pdot, rows, partials):
+        laws = self._scalar_laws(p, rows, partials)
+        q = [x for m, _, _ in laws for x in (m, -m)]
+        if not partials:
+            return q, None, None
+        return q, [x for _, d_a, d_b in laws for x in (d_a, d_b, -d_a, -d_b)], None
 
     def outflows(self, t, p, pdot):
         if self.n <= FEW_INSTANCES:
-            laws = self._scalar_laws(p, partials=True)
+            laws = self._scalar_laws(p.ravel().tolist(), self._own_rows, partials=True)
             return (np.array([(m, -m) for m, _, _ in laws]),
                     np.array([((d_a, d_b), (-d_a, -d_b)) for _, d_a, d_b in laws]), None)
         mdot, d_a, d_b = quadrature_flow(p[:, 0], p[:, 1], self._r, self.context.options.flow_band)
@@ -45,7 +58,8 @@ class _QuadratureFamily(ElementFamily):
 
     def flows(self, t, p, pdot):
         if self.n <= FEW_INSTANCES and p.ndim == 2:
-            return np.array([(m, -m) for m, _, _ in self._scalar_laws(p, partials=False)])
+            return np.array([(m, -m) for m, _, _ in
+                             self._scalar_laws(p.ravel().tolist(), self._own_rows, False)])
         mdot, _, _ = quadrature_flow(p[..., 0], p[..., 1], self._r,
                                      self.context.options.flow_band, partials=False)
         return mdot[..., None] * _OUT_IN

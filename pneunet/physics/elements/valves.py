@@ -75,6 +75,8 @@ class MembraneValve(ElementFamily):
             fwd_rows = np.array(list(self._fwd.values()))
             both = self._both or (fwd_rows, fwd_rows)
             self._rows = list(zip(both[0].T.tolist(), both[1].T.tolist()))
+        self.on_floats = self._rows is not None
+        self._own_rows = np.arange(3 * self.n).reshape(self.n, 3).tolist()  # p (n, 3) raveled
 
     def _analytic_flow(self, p, partials=True):
         if self._both is None:
@@ -85,16 +87,24 @@ class MembraneValve(ElementFamily):
         return valve_flow_and_partials(p[..., 0], p[..., 1], p[..., 2], *params,
                                        band=self.context.options.flow_band, partials=partials)
 
-    def _scalar_laws(self, p, partials):
-        """Each valve's (ṁ, partials) on Python floats (laws.Scalar), p (n, 3)."""
+    def _scalar_laws(self, p, rows, partials):
+        """Each valve's (ṁ, partials) on Python floats (laws.Scalar): ``p`` a list of
+        pressures, ``rows`` each valve's indices of its (in, out, ctrl) in it."""
         band = self.context.options.flow_band
-        return [valve_flow_and_partials(p_in, p_out, p_ctrl, *(fwd if p_in >= p_out else bwd),
+        return [valve_flow_and_partials(p[i], p[o], p[c], *(fwd if p[i] >= p[o] else bwd),
                                         band=band, partials=partials, xp=Scalar)
-                for (p_in, p_out, p_ctrl), (fwd, bwd) in zip(p.tolist(), self._rows)]
+                for (i, o, c), (fwd, bwd) in zip(rows, self._rows)]
+
+    def float_outflows(self, t, p, pdot, rows, partials):
+        laws = self._scalar_laws(p, rows, partials)
+        q = [x for m, _ in laws for x in (m, -m, 0.0)]
+        if not partials:
+            return q, None, None
+        return q, [x for _, (a, b, c) in laws for x in (a, b, c, -a, -b, -c, 0.0, 0.0, 0.0)], None
 
     def outflows(self, t, p, pdot):
         if self._rows is not None:
-            laws = self._scalar_laws(p, partials=True)
+            laws = self._scalar_laws(p.ravel().tolist(), self._own_rows, partials=True)
             return (np.array([(m, -m, 0.0) for m, _ in laws]),
                     np.array([(g, (-g[0], -g[1], -g[2]), _NO_FLOW) for _, g in laws]), None)
         mdot, (d_in, d_out, d_ctrl) = self._analytic_flow(p)
@@ -112,7 +122,8 @@ class MembraneValve(ElementFamily):
 
     def flows(self, t, p, pdot):
         if self._rows is not None and p.ndim == 2:
-            return np.array([(m, -m, 0.0) for m, _ in self._scalar_laws(p, partials=False)])
+            return np.array([(m, -m, 0.0) for m, _ in
+                             self._scalar_laws(p.ravel().tolist(), self._own_rows, False)])
         return self._flow(p)[..., None] * _PORTS
 
     def signals(self, t, p):

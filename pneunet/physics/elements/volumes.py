@@ -18,7 +18,7 @@ from abc import ABC, abstractmethod
 import numpy as np
 
 from ...common.errors import ParameterError
-from .base import ElementFamily, Param, register
+from .base import FEW_INSTANCES, ElementFamily, Param, register
 
 
 class StorageNode(ElementFamily, ABC):
@@ -71,6 +71,8 @@ class Volume(StorageNode):
         if opts.liquid is not None:  # C = ρ·V/K, constant (n does not apply)
             self._c0 = opts.liquid.density * self.volume() / opts.liquid.bulk_modulus
             self._isothermal = True
+        self._c0_floats = self._c0.tolist()
+        self.on_floats = self.n <= FEW_INSTANCES
 
     def volume(self) -> np.ndarray:
         """Volume of each instance, mL."""
@@ -84,6 +86,18 @@ class Volume(StorageNode):
         expo = 1.0 / self._n - 1.0
         c = self._c0 * ratio ** expo
         return c, c * expo / (ratio * self._p_ref)
+
+    def float_outflows(self, t, p, pdot, rows, partials):
+        if self._isothermal:
+            c, dc = self._c0_floats, None
+        else:  # numpy's power on an array, as outflows (math.pow differs in the last bit)
+            c, dc = (x.tolist() for x in self.capacitance(np.array([p[i] for i, in rows])))
+        rates = [pdot[i] for i, in rows]
+        q = [ci * rate for ci, rate in zip(c, rates)]
+        if not partials:
+            return q, None, None
+        dq_dp = [0.0] * len(rates) if dc is None else [d * rate for d, rate in zip(dc, rates)]
+        return q, dq_dp, list(c)
 
 
 @register

@@ -6,8 +6,8 @@
 3. locate the residual of the held-out cycles: which signal, which part of the cycle,
    and the time shift that best aligns model and recording there;
 4. screen every candidate effect on a grid across its parameter range, the base
-   parameters moved by one Gauss–Newton step each (one simulation per point, points
-   in parallel), fit the most promising ones fully (warm-started at their best point),
+   parameters re-centred on the recorded cycle and the residual projected off the base
+   fit's Jacobian (two simulations per point, points in parallel), fit the most promising ones fully (warm-started at their best point),
    rank all by their error on the later, held-out cycles;
 5. the verdict (:func:`pneunet.truth.core.verdict.decide`): ``adequate`` (base model at
    the floor), ``explained`` (the best effect, or it plus the next, brings the held-out

@@ -1,7 +1,7 @@
 """Screening candidate effects cheaply before fitting any fully: each effect at the
 points of its parameter grid, the fitted model's parameters re-centred on the recorded
-cycle and moved by a damped Gauss–Newton step with that fit's Jacobian (one or two
-simulations per point, points in parallel).  Used by
+cycle, its residual projected off that fit's Jacobian (two simulations per point, points
+in parallel).  Used by
 :func:`~pneunet.truth.circuits.diagnosis.diagnose_trace` on the base model, and again on top of
 the best single effect when it alone does not reach the noise floor."""
 from __future__ import annotations
@@ -18,11 +18,12 @@ from .start import initial_values
 
 class ScreenTask:
     """One screening point (picklable, runs in a worker): the effect at one point of its
-    grid, the base parameters re-centred on the recorded cycle, then moved by
-    :data:`SCREEN_STEPS` damped Gauss–Newton step(s) with the base fit's Jacobian J
-    (cycle alignment keeps the residual close to linear in them; each step at most
-    :data:`SCREEN_STEP` in ln value, halved when it does not help).  Its merit is the
-    best fit-window residual reached, projected off J's columns, ‖(I − J·J⁺)·r‖²."""
+    grid, the base parameters re-centred on the recorded cycle (one simulation).  Its
+    merit is the fit-window residual there (one more), projected off the columns of the
+    base fit's Jacobian J, ‖(I − J·J⁺)·r‖²: what no small move of the base parameters
+    can remove (cycle alignment keeps the residual close to linear in them).  A
+    Gauss–Newton step in them before the projection (a third simulation) changed no
+    study case's two best (benchmarks/README.md, the screen)."""
 
     def __init__(self, effect, point, names, x_base, jac, bounds, model_args, data,
                  on_top=()):
@@ -37,21 +38,12 @@ class ScreenTask:
         model = TraceModel(*self.model_args[0], effects=(*self.on_top, eff),
                            budget=SCREEN_BUDGET, **self.model_args[1])
         fun = TraceResidual(model, names, *self.data)
-        xb, limit = self._recentred(model, names, theta), SCREEN_STEP
+        xb = self._recentred(model, names, theta)
         if model.failures:  # a point the circuit cannot be simulated at: no more time on it
             return self._failed(model)
         r = fun(np.concatenate([xb, theta]))
         if model.failures:
             return self._failed(model)
-        for _ in range(SCREEN_STEPS):
-            step = np.linalg.lstsq(self.jac, -r, rcond=None)[0]
-            step *= min(1.0, limit / max(np.max(np.abs(step)), 1e-300))
-            trial = np.clip(xb + step, *self.bounds)
-            r1 = fun(np.concatenate([trial, theta]))
-            if r1 @ r1 < r @ r:
-                xb, r = trial, r1
-            else:
-                limit /= 2
         left = r - self.jac @ np.linalg.lstsq(self.jac, r, rcond=None)[0]
         values = dict(zip(self.names, np.exp(xb)))
         values.update(self.point)
@@ -88,9 +80,6 @@ class ScreenTask:
 #: tolerance); the best two always are (a control-line tube's screen merit is 1.5× a dead
 #: volume's in rms, and only its full fit reaches the floor)
 SCREEN_KEEP = 2.25
-#: largest change of a base parameter (ln value) in one screening step, and the steps
-SCREEN_STEP = 0.25
-SCREEN_STEPS = 1
 #: a screening point's simulation budget, (× the base fit's typical simulation, at
 #: least s): a point that makes the circuit this much stiffer (a long thin tube with no
 #: volume) is a failed point, as it would be in a fit, not seconds lost
