@@ -5,14 +5,14 @@ same thing.  When the state just after a branch jump (a valve switching) repeats
 state just after an earlier jump, to within :data:`CYCLE_TOL` times the integrator's own
 tolerance (atol + rtol·|p|) in every unknown, what follows is that cycle again, shifted
 by its period T — the periodic steady state.  :func:`steady_transient` integrates in
-:data:`CHUNKS` pieces of the span, stops at the end of the piece where the first repeat
-is seen, and fills the rest of [t_start, t_stop] with copies of the last cycle's rows
+pieces (:data:`FIRST` of the span, then :data:`PIECE`), stops at the end of the piece
+where the first repeat is seen, and fills the rest of [t_start, t_stop] with copies of the last cycle's rows
 (the integrator's own rows, at their times + kT).  ``.meas`` statements then read the
 signal the whole transient would give, to within the integrator's error.
 
 Used for the samples of a design (:class:`~pneunet.design.metrics.SpecMeasure`): for the
 oscillator of ``netlists/oscillator_design.pn`` the 12 s transient is simulated to
-~5 s.  A circuit with time-varying sources, that the single-rate integrator does not run
+4.5–5 s.  A circuit with time-varying sources, that the single-rate integrator does not run
 (multirate cells) gets None; one whose cycle does not repeat within the first
 :data:`GIVE_UP` of the span is simulated again by the plain transient, whose results
 are then exactly those of ``circuit.tran``.
@@ -25,10 +25,11 @@ from ..common.solver_messages import captured
 
 #: a repeat: every unknown within CYCLE_TOL·(atol + rtol·|p|) of the earlier jump's state
 CYCLE_TOL = 10.0
-#: the span is integrated in this many equal pieces (each end restarts IDA: ~1 % steps)
-CHUNKS = 12
-#: without a repeat by this fraction of the span (no jump by half of it), the chunks are
-#: dropped and the plain transient runs: its results are then exactly the plain ones
+#: the first piece integrated, and each next one, as fractions of the span (every piece
+#: restarts IDA: ~3 ms and ~10 steps for the oscillator)
+FIRST, PIECE = 1 / 3, 1 / 24
+#: without a repeat by this fraction of the span (no jump in the first piece), the pieces
+#: are dropped and the plain transient runs: its results are then exactly the plain ones
 GIVE_UP = 0.5
 
 
@@ -78,8 +79,7 @@ def _integrate(circuit, dae, t_start, t_stop, t_step, max_output_points):
     wall = time.perf_counter()
     y, yp = consistent_state(dae, t_start, dae.initial_state(t_start))
     grid = np.append(np.arange(t_start, t_stop, t_step)[1:], t_stop) if t_step else None
-    ends = t_start + (t_stop - t_start) * np.arange(1, CHUNKS + 1) / CHUNKS
-    ends[-1] = t_stop
+    ends = t_start + (t_stop - t_start) * np.arange(FIRST, GIVE_UP + PIECE / 2, PIECE)
     times, states, jumps, after = [], [], [], []  # after: the row just after each jump
     steps, t, counters = 0, t_start, {}
     for end in ends:
@@ -101,8 +101,7 @@ def _integrate(circuit, dae, t_start, t_stop, t_step, max_output_points):
         cycle = _repeat(dae, np.concatenate(states), jumps, after)
         if cycle is not None:
             break
-        if t - t_start >= GIVE_UP * (t_stop - t_start) or not jumps and \
-                t - t_start >= 0.5 * GIVE_UP * (t_stop - t_start):
+        if end >= ends[-1] or not jumps:
             return circuit.tran(t_stop, t_step=t_step, t_start=t_start,  # the plain one
                                 max_output_points=max_output_points)
     i, j = cycle
