@@ -421,12 +421,12 @@ class AlgebraicBlock:
         cols = _cat(c for _, c in pair_to)
         self._rows = rows
         keys, self._pair_to = np.unique(cols * na + rows, return_inverse=True)
-        self._floats = None
+        self.floats = None  # the block on Python floats (small circuits), if it has one
         if self.dense:
             self._pair_to = rows * na + cols  # row-major position in the dense block
             self._n_entries = na * na
             if on_floats(part[0] for part in self._parts):
-                self._floats = FloatAlgebraicBlock(dae, [
+                self.floats = FloatAlgebraicBlock(dae, [
                     (fam, nodes, list(zip(flow_at.tolist(), to.tolist())),
                      list(zip(pair_at.tolist(), (r * na + c).tolist(), r.tolist())))
                     for (fam, nodes, flow_at, pair_at, *_), to, (r, c)
@@ -442,8 +442,8 @@ class AlgebraicBlock:
     def evaluate(self, t, y, residual=True):
         """(F_a or None, J_aa, s_a): s_a the row scale Σ|contribution| of each algebraic
         equation over its algebraic columns (mg/(s·kPa)), floored at 1e-300."""
-        if self._floats is not None:
-            return self._floats.evaluate(t, y, residual)
+        if self.floats is not None:
+            return self.floats.evaluate(t, y, residual)
         p, _ = self.dae._pressures_at(t, y)
         flows, partials = self._flows, self._partials
         for fam, nodes, flow_at, pair_at, zeros, flow_slice, pair_slice in self._parts:

@@ -64,6 +64,12 @@ class FloatAlgebraicBlock:
         self._zeros = [0.0] * (dae.n + len(dae.fixed_names))
 
     def evaluate(self, t, y, residual=True):
+        res, data, scale = self.lists(t, y, residual)
+        return (np.array(res) if residual else None, np.array(data).reshape(self.size, -1),
+                np.array(scale))
+
+    def lists(self, t, y, residual=True):
+        """(F_a or None, J_aa row-major, s_a floored at 1e-300) as lists of floats."""
         p = self.dae._pressures_at(t, y)[0].tolist()
         na = self.size
         res, data, scale = [0.0] * na, [0.0] * (na * na), [0.0] * na
@@ -76,5 +82,4 @@ class FloatAlgebraicBlock:
                 d = dq_dp[k]
                 data[pos] += d
                 scale[row] += abs(d)
-        return (np.array(res) if residual else None, np.array(data).reshape(na, na),
-                np.maximum(np.array(scale), 1e-300))
+        return res if residual else None, data, [max(s, 1e-300) for s in scale]

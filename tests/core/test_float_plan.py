@@ -51,8 +51,8 @@ def test_floats_equal_the_vectorised_path_to_the_bit(build):
     floats, arrays = CircuitDAE(build()), _vectorised(build())
     assert floats._floats is not None  # the float path is the one under test
     block_f, block_a = floats.algebraic_block(), arrays.algebraic_block()
-    assert block_f._floats is not None and block_f.size >= 1
-    block_a._floats = None
+    assert block_f.floats is not None and block_f.size >= 1
+    block_a.floats = None
     rng = np.random.default_rng(7)
     for k in range(200):
         # around zero flow, flow reversal and closed valves; rates of both signs
@@ -74,3 +74,38 @@ def test_a_family_without_a_float_path_keeps_the_circuit_vectorised():
     c = _oscillator()
     c.check_valve("CV", "tank", "atm", 5.0)
     assert CircuitDAE(c)._floats is None
+
+
+def test_one_node_relaxation_and_indicator_on_floats_equal_the_array_path(monkeypatch):
+    """The fold indicator and branch-jump relaxation of a one-node algebraic block run on
+    floats (FoldMonitor._relax_one); at the oscillator's own jumps and at random states
+    (landings and failures) they give the array path's results to the bit."""
+    from pneunet.engine.solvers import folds
+
+    pushed = []
+    relax_one = folds.FoldMonitor._relax_one
+    monkeypatch.setattr(folds.FoldMonitor, "_relax_one",
+                        lambda self, t, y: pushed.append((t, y.copy())) or relax_one(self, t, y))
+    sol = _oscillator().tran(8.0)
+    assert len(sol.jumps) >= 2 and len(pushed) >= len(sol.jumps)
+    dae = CircuitDAE(_oscillator())
+    monitor = folds.FoldMonitor(dae, dae.options.fold_threshold)
+    assert monitor._one is not None
+    rng = np.random.default_rng(5)
+    states = pushed + [(1.0, rng.uniform([96.0, 96.0], [496.0, 496.0])) for _ in range(150)]
+    outcomes = set()
+    for steps in (folds.RELAX_STEPS, 6):  # 6: most relaxations give up (None)
+        monkeypatch.setattr(folds, "RELAX_STEPS", steps)
+        for t, y in states:
+            one, ref = relax_one(monitor, t, y), monitor._relax(t, y)
+            outcomes.add(one is None)
+            if one is None or ref is None:
+                assert one is None and ref is None
+            else:
+                np.testing.assert_array_equal(one, ref)
+    assert outcomes == {True, False}  # landings and failures both compared
+    for t, y in states:
+        kappa = monitor.indicator(t, y)
+        monitor._one = None
+        assert kappa == monitor.indicator(t, y)
+        monitor._one = dae.algebraic_block().floats

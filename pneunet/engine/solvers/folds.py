@@ -20,6 +20,8 @@ longer at a fold), then the relaxation is integrated and polished by Newton.
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ...common.errors import SolverError
@@ -34,9 +36,14 @@ class FoldMonitor:
         self.threshold = threshold
         self.reference = 1.0
         self._block = dae.algebraic_block()
+        # one algebraic node on Python floats: the indicator and relaxation without arrays
+        self._one = self._block.floats if self._block.size == 1 else None
 
     def indicator(self, t, y) -> float:
         """Smallest normalised LU pivot of J_aa (0 at a fold, ~1 far from one)."""
+        if self._one is not None:
+            _, jac, scale = self._one.lists(t, y, residual=False)
+            return abs(jac[0]) / scale[0]
         _, jac, scale = self._block.evaluate(t, y, residual=False)
         if isinstance(jac, np.ndarray):
             if jac.shape[0] == 1:
@@ -76,7 +83,7 @@ class FoldMonitor:
         for _ in range(30):
             pushed = y.copy()
             pushed[d] += yp[d] * delta
-            landed = self._relax(t + delta, pushed)
+            landed = (self._relax if self._one is None else self._relax_one)(t + delta, pushed)
             if landed is not None and \
                     self.indicator(t + delta, landed) > 3 * self.threshold * self.reference:
                 return t + delta, landed
@@ -115,6 +122,36 @@ class FoldMonitor:
                     dtau *= min(4.0, 0.9 / np.sqrt(max(err, 1e-6)))
                     continue
                 dtau *= max(0.2, 0.9 / np.sqrt(err)) if np.isfinite(err) else 0.2
+            else:
+                dtau *= 0.25
+            if dtau < 1e-14:
+                return None
+        return None
+
+    def _relax_one(self, t, y):
+        """:meth:`_relax` for one algebraic node on Python floats: the same operations in
+        the same order, so the same bits (a 1×1 solve is a division and its eigenvalue the
+        entry), without the ~30 one-element array operations of each step."""
+        k = int(self.alg[0])
+        full = y.copy()
+        ya = float(full[k])
+        (res,), (jac,), (scale,) = self._one.lists(t, full)
+        dtau = RELAX_TOL * (ya * scale / max(abs(res), 1e-300))
+        for _ in range(RELAX_STEPS):
+            rate = -res / scale
+            pivot = dtau * jac / scale + 1.0
+            step = dtau * rate / pivot if pivot else math.nan
+            if math.isfinite(step) and abs(step) <= 0.2 * ya and step * rate > 0:
+                full[k] = ya + step
+                (res1,), (jac1,), (scale1,) = self._one.lists(t, full)
+                err = 0.5 * dtau * abs(-res1 / scale1 - rate) / (RELAX_TOL * ya)
+                if math.isfinite(res1) and err <= 1.0:
+                    ya, res, jac, scale = float(full[k]), res1, jac1, scale1
+                    if abs(res / scale) <= 1e-10 * ya:
+                        return full if jac > 0 else None
+                    dtau *= min(4.0, 0.9 / math.sqrt(max(err, 1e-6)))
+                    continue
+                dtau *= max(0.2, 0.9 / math.sqrt(err)) if math.isfinite(err) else 0.2
             else:
                 dtau *= 0.25
             if dtau < 1e-14:
