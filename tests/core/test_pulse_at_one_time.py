@@ -75,3 +75,17 @@ def test_a_large_bank_at_one_time_is_its_waveforms_too():
     for t in (0.0, 0.23, 1.3, 2.31, 5.51, 12.0):
         assert bank.value(t).tolist() == pytest.approx([w.value(t) for w in waves],
                                                         rel=1e-15, abs=1e-12)
+
+
+def test_a_small_bank_at_one_time_on_floats_is_its_vectorised_value():
+    """value_at (what a pressure source gives IDA at a new time) on floats is value to
+    the bit, constants and pulses interleaved, at corners and either side of them."""
+    waves = [Pulse(96.0 + 10 * k, 496.0 - 7 * k, *timing[:2], timing[3], timing[2], timing[4])
+             for k, timing in enumerate(TIMINGS)]
+    waves[1:1] = [Constant(101.3)]
+    waves.append(Constant(250.0))
+    bank = _WaveformBank(waves)
+    corners = [d + x for d, r, w, f, p in TIMINGS for x in (0, r, r + w, r + w + f)]
+    for t in np.concatenate([np.linspace(-1.0, 25.0, 1001), corners,
+                             np.nextafter(corners, 30.0), np.nextafter(corners, -30.0)]):
+        assert bank.value_at(float(t)).tolist() == bank.value(float(t)).tolist(), t
