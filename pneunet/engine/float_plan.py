@@ -65,7 +65,7 @@ class FloatAlgebraicBlock:
 
     def evaluate(self, t, y, residual=True):
         res, data, scale = self.lists(t, y, residual)
-        return (np.array(res) if residual else None, np.array(data).reshape(self.size, -1),
+        return (np.array(res) if residual else None, np.array(data).reshape(self.size, self.size),
                 np.array(scale))
 
     def lists(self, t, y, residual=True):
