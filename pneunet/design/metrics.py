@@ -15,6 +15,10 @@ from .sweep import DeckMeasure, measured
 from ..netlist.builder import NetlistBuilder
 from ..common.errors import ParameterError
 
+#: this process's last deck, by (builder, .param values): a yield's samples differ in
+#: element parameters only, and read the analyses and .meas lines of one elaboration
+_LAST_DECK: dict = {}
+
 
 def control_node(circuit) -> str:
     """The control node of the circuit's first valve (an oscillator's tank)."""
@@ -81,7 +85,11 @@ class SpecMeasure(DeckMeasure):
         from ..netlist.deck import Tran
         from ..netlist.runner import evaluate_measures
 
-        deck = self.builder.deck(point)
+        key = (self.builder._token,
+               sorted((k, v) for k, v in (point or {}).items() if "." not in k))
+        if _LAST_DECK.get("key") != key:
+            _LAST_DECK.update(key=key, deck=self.builder.deck(point))
+        deck = _LAST_DECK["deck"]
         if self.steady and len(deck.analyses) == 1 and isinstance(deck.analyses[0], Tran):
             tran = deck.analyses[0]
             sol = steady_transient(circuit, tran.t_stop, tran.t_step, tran.t_start,

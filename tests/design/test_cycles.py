@@ -134,3 +134,21 @@ def test_a_design_measures_the_steady_cycle_unless_told_not_to():
     problem._cache.clear()
     assert problem.evaluate([point])[0]["period"] == plain
     assert steady == pytest.approx(plain, abs=5e-4) and steady != plain
+
+
+def test_each_points_params_reach_its_measurements(tmp_path):
+    """The samples' deck is elaborated once per .param values (the analyses and .meas
+    lines of the last one are reused): a .meas that reads a .param follows each point."""
+    from pneunet.design.problem import Problem
+
+    text = NETLIST.read_text().replace(".param Rout=1.132", ".param TM=6 Rout=1.132") + \
+        ".meas tran p_at FIND p(tank) AT={TM}\n"
+    path = tmp_path / "at.pn"
+    path.write_text(text)
+    problem = Problem(path, ["p_at>=100kPa"], workers=1)
+    times = (6.0, 7.5, 6.2)
+    rows = problem.evaluate([{"TM": tm} for tm in times])
+    for row, tm in zip(rows, times):
+        whole = run_deck(parse_file(path, overrides={"TM": tm})).measures["p_at"]
+        assert row["p_at"] == pytest.approx(whole, abs=0.05)
+    assert len({row["p_at"] for row in rows}) == 3
