@@ -118,7 +118,7 @@ class PressureSource(ElementFamily):
         self._last_t, self._last_value = None, None
 
     def pinned_pressure(self, t):
-        if np.ndim(t):
+        if not isinstance(t, float) and np.ndim(t):  # (np.ndim of a float builds an array)
             return self._waveforms.value(t)[..., None]
         # IDA evaluates several times at one t: the bank once per t (constants once)
         if t != self._last_t and (self._last_value is None or not self._waveforms.constant):
