@@ -32,25 +32,21 @@ class _QuadratureFamily(ElementFamily):
         self.on_floats = self.n <= FEW_INSTANCES
         self._own_rows = np.arange(2 * self.n).reshape(self.n, 2).tolist()  # p (n, 2) raveled
 
-    def _scalar_laws(self, p, rows, partials):
-        """Each instance's (ṁ, ∂ṁ/∂p_a, ∂ṁ/∂p_b) on Python floats (laws.Scalar): ``p`` a
-        list of pressures, ``rows`` each instance's indices of its (a, b) in it."""
-        band = self.context.options.flow_band
-        return [quadrature_flow(p[a], p[b], r, band, partials, xp=Scalar)
-                for (a, b), r in zip(rows, self._r_floats)]
-
     def float_outflows(self, t, p, pdot, rows, partials):
-        laws = self._scalar_laws(p, rows, partials)
-        q = [x for m, _, _ in laws for x in (m, -m)]
-        if not partials:
-            return q, None, None
-        return q, [x for _, d_a, d_b in laws for x in (d_a, d_b, -d_a, -d_b)], None
+        """Each instance's law on Python floats (laws.Scalar), in one loop (few of them)."""
+        band = self.context.options.flow_band
+        q, dq = [], [] if partials else None
+        for (a, b), r in zip(rows, self._r_floats):
+            m, d_a, d_b = quadrature_flow(p[a], p[b], r, band, partials, xp=Scalar)
+            q += (m, -m)
+            if partials:
+                dq += (d_a, d_b, -d_a, -d_b)
+        return q, dq, None
 
     def outflows(self, t, p, pdot):
         if self.n <= FEW_INSTANCES:
-            laws = self._scalar_laws(p.ravel().tolist(), self._own_rows, partials=True)
-            return (np.array([(m, -m) for m, _, _ in laws]),
-                    np.array([((d_a, d_b), (-d_a, -d_b)) for _, d_a, d_b in laws]), None)
+            q, dq, _ = self.float_outflows(t, p.ravel().tolist(), None, self._own_rows, True)
+            return np.array(q).reshape(self.n, 2), np.array(dq).reshape(self.n, 2, 2), None
         mdot, d_a, d_b = quadrature_flow(p[:, 0], p[:, 1], self._r, self.context.options.flow_band)
         grad = np.empty((self.n, 1, 2))
         grad[:, 0, 0], grad[:, 0, 1] = d_a, d_b
@@ -58,8 +54,8 @@ class _QuadratureFamily(ElementFamily):
 
     def flows(self, t, p, pdot):
         if self.n <= FEW_INSTANCES and p.ndim == 2:
-            return np.array([(m, -m) for m, _, _ in
-                             self._scalar_laws(p.ravel().tolist(), self._own_rows, False)])
+            q, _, _ = self.float_outflows(t, p.ravel().tolist(), None, self._own_rows, False)
+            return np.array(q).reshape(self.n, 2)
         mdot, _, _ = quadrature_flow(p[..., 0], p[..., 1], self._r,
                                      self.context.options.flow_band, partials=False)
         return mdot[..., None] * _OUT_IN

@@ -21,7 +21,6 @@ from .base import ElementFamily, FEW_INSTANCES, Param, register
 
 _FD_STEP_KPA = 1e-4
 _PORTS = np.array([1.0, -1.0, 0.0])  # flow in→out leaves node in, enters out; none at ctrl
-_NO_FLOW = (0.0, 0.0, 0.0)  # the control port's row of partials
 
 
 @register
@@ -87,26 +86,23 @@ class MembraneValve(ElementFamily):
         return valve_flow_and_partials(p[..., 0], p[..., 1], p[..., 2], *params,
                                        band=self.context.options.flow_band, partials=partials)
 
-    def _scalar_laws(self, p, rows, partials):
-        """Each valve's (ṁ, partials) on Python floats (laws.Scalar): ``p`` a list of
-        pressures, ``rows`` each valve's indices of its (in, out, ctrl) in it."""
-        band = self.context.options.flow_band
-        return [valve_flow_and_partials(p[i], p[o], p[c], *(fwd if p[i] >= p[o] else bwd),
-                                        band=band, partials=partials, xp=Scalar)
-                for (i, o, c), (fwd, bwd) in zip(rows, self._rows)]
-
     def float_outflows(self, t, p, pdot, rows, partials):
-        laws = self._scalar_laws(p, rows, partials)
-        q = [x for m, _ in laws for x in (m, -m, 0.0)]
-        if not partials:
-            return q, None, None
-        return q, [x for _, (a, b, c) in laws for x in (a, b, c, -a, -b, -c, 0.0, 0.0, 0.0)], None
+        """Each valve's law on Python floats (laws.Scalar), in one loop (few valves)."""
+        band = self.context.options.flow_band
+        q, dq = [], [] if partials else None
+        for (i, o, c), (fwd, bwd) in zip(rows, self._rows):
+            m, g = valve_flow_and_partials(p[i], p[o], p[c], *(fwd if p[i] >= p[o] else bwd),
+                                           band=band, partials=partials, xp=Scalar)
+            q += (m, -m, 0.0)
+            if partials:
+                d_in, d_out, d_ctrl = g
+                dq += (d_in, d_out, d_ctrl, -d_in, -d_out, -d_ctrl, 0.0, 0.0, 0.0)
+        return q, dq, None
 
     def outflows(self, t, p, pdot):
         if self._rows is not None:
-            laws = self._scalar_laws(p.ravel().tolist(), self._own_rows, partials=True)
-            return (np.array([(m, -m, 0.0) for m, _ in laws]),
-                    np.array([(g, (-g[0], -g[1], -g[2]), _NO_FLOW) for _, g in laws]), None)
+            q, dq, _ = self.float_outflows(t, p.ravel().tolist(), None, self._own_rows, True)
+            return np.array(q).reshape(self.n, 3), np.array(dq).reshape(self.n, 3, 3), None
         mdot, (d_in, d_out, d_ctrl) = self._analytic_flow(p)
         grads = np.stack(np.broadcast_arrays(d_in, d_out, d_ctrl), axis=-1)  # (n, 3)
         for model, idx in self._custom.values():
@@ -122,8 +118,8 @@ class MembraneValve(ElementFamily):
 
     def flows(self, t, p, pdot):
         if self._rows is not None and p.ndim == 2:
-            return np.array([(m, -m, 0.0) for m, _ in
-                             self._scalar_laws(p.ravel().tolist(), self._own_rows, False)])
+            q, _, _ = self.float_outflows(t, p.ravel().tolist(), None, self._own_rows, False)
+            return np.array(q).reshape(self.n, 3)
         return self._flow(p)[..., None] * _PORTS
 
     def signals(self, t, p):
