@@ -3,8 +3,8 @@
     python benchmarks/bench_design.py                     # 2 workers, --yield-se 0.025 against all 1000 samples
     python benchmarks/bench_design.py --samples 100       # quick check
     python benchmarks/bench_design.py --yield-se 0        # only the 1000-sample yield (issue 13)
-    python benchmarks/bench_design.py --early-only        # only search + early-stopped yield
-    python benchmarks/bench_design.py --whole             # samples on whole transients (no steady cycle)
+    python benchmarks/bench_design.py --early-only        # search + early-stopped yield only
+    python benchmarks/bench_design.py --whole             # whole transients (no steady cycle)
 
 Searches R_out, R_vent and V of ``netlists/oscillator_design.pn`` for a 3 s period with at
 least 130 kPa swing, then the yield of the design under p_close ± 5 kPa (uniform), on one

@@ -6,14 +6,15 @@ state just after an earlier jump, to within :data:`CYCLE_TOL` times the integrat
 tolerance (atol + rtol·|p|) in every unknown, what follows is that cycle again, shifted
 by its period T — the periodic steady state.  :func:`steady_transient` integrates in
 pieces (:data:`FIRST` of the span, then :data:`PIECE`), stops at the end of the piece
-where the first repeat is seen, and fills the rest of [t_start, t_stop] with copies of the last cycle's rows
-(the integrator's own rows, at their times + kT).  ``.meas`` statements then read the
-signal the whole transient would give, to within the integrator's error.
+where the first repeat is seen, and fills the rest of [t_start, t_stop] with copies of
+the last cycle's rows (the integrator's own rows, at their times + kT).  ``.meas``
+statements then read the signal the whole transient would give, to within the
+integrator's error.
 
 Used for the samples of a design (:class:`~pneunet.design.metrics.SpecMeasure`): for the
 oscillator of ``netlists/oscillator_design.pn`` the 12 s transient is simulated to
-4.5–5 s.  A circuit with time-varying sources, that the single-rate integrator does not run
-(multirate cells) gets None; one whose cycle does not repeat within the first
+4.5–5 s.  A circuit with time-varying sources, or that the single-rate integrator does
+not run (multirate cells), gets None; one whose cycle does not repeat within the first
 :data:`GIVE_UP` of the span is simulated again by the plain transient, whose results
 are then exactly those of ``circuit.tran``.
 """
