@@ -87,9 +87,10 @@ class SpecMeasure(DeckMeasure):
 
         key = (self.builder._token,
                sorted((k, v) for k, v in (point or {}).items() if "." not in k))
-        if _LAST_DECK.get("key") != key:
-            _LAST_DECK.update(key=key, deck=self.builder.deck(point))
-        deck = _LAST_DECK["deck"]
+        last = _LAST_DECK.get("last")  # one read: threads of a dask worker share it
+        if last is None or last[0] != key:
+            last = _LAST_DECK["last"] = (key, self.builder.deck(point))
+        deck = last[1]
         if self.steady and len(deck.analyses) == 1 and isinstance(deck.analyses[0], Tran):
             tran = deck.analyses[0]
             sol = steady_transient(circuit, tran.t_stop, tran.t_step, tran.t_start,
