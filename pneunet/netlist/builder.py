@@ -97,7 +97,7 @@ class NetlistBuilder:
             if copy and self._token not in _LOADED:
                 _LOADED[self._token] = self._source
                 for token in list(_LOADED)[:-LOADED_KEPT]:
-                    del _LOADED[token]
+                    _LOADED.pop(token, None)  # (another thread may have dropped it)
         return self._source
 
     def __call__(self, point: dict):
