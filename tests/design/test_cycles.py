@@ -102,6 +102,11 @@ def test_pickled_builders_parse_their_netlist_once_per_process(monkeypatch):
     assert [c.elements["Rout"].params["R"] for c in circuits] == [1.0, 2.0, 3.0]
     assert copies[0].deck({"V": 50}).params["V"] == 50
     assert len(calls) == 1
+    from pneunet.netlist import builder as B
+
+    for _ in range(B.LOADED_KEPT + 2):  # more builders: only the last few sources are kept
+        pickle.loads(pickle.dumps(NetlistBuilder(NETLIST)))({})
+    assert len(B._LOADED) == B.LOADED_KEPT
 
 
 def test_a_cycle_still_settling_is_not_taken_for_a_repeat():
