@@ -43,3 +43,32 @@ def test_a_point_that_cannot_be_simulated_costs_one_simulation(monkeypatch):
     assert bad["rss"] == math.inf and bad["simulations"] == 1
     good = _task({"n": 1.1})()
     assert math.isfinite(good["rss"]) and good["simulations"] >= 2
+
+
+def test_a_kept_candidates_start_is_moved_by_one_damped_gauss_newton_step():
+    """The step that starts a kept candidate's full fit, from base values 2 % off with
+    the residual's own Jacobian there: the least-squares step, scaled so that no
+    parameter moves more than SCREEN_STEP in ln value, one simulation, a lower
+    residual; with the Jacobian's sign flipped the step goes uphill and is not taken."""
+    from pneunet.truth.circuits.model import TraceModel, TraceResidual
+    from pneunet.truth.circuits.screen import SCREEN_STEP
+
+    task = _task({"n": 1.0})  # the isothermal tank: the record's own model
+    fun = TraceResidual(TraceModel(oscillator), NAMES + ["n"], *task.data)
+    x_off = np.log(list(BASE.values())) + np.array([0.02, -0.02, 0.02])
+    r = fun(np.append(x_off, 0.0))
+    h = 1e-4
+    jac = np.column_stack([(fun(np.append(x_off + h * e, 0.0)) - r) / h for e in np.eye(3)])
+    task.jac = jac
+    values, calls = task.step((x_off, r))
+    step = np.linalg.solve(jac.T @ jac, -jac.T @ r)
+    step *= min(1.0, SCREEN_STEP / np.max(np.abs(step)))
+    moved = np.log([values[k] for k in NAMES])
+    assert calls == 1 and values["n"] == 1.0
+    np.testing.assert_allclose(moved, x_off + step, rtol=0, atol=1e-9)
+    r1 = fun(np.append(moved, 0.0))
+    assert r1 @ r1 < 0.5 * (r @ r)
+    task.jac = -jac
+    values, calls = task.step((x_off, r))
+    assert calls == 1
+    np.testing.assert_allclose(np.log([values[k] for k in NAMES]), x_off, rtol=0, atol=1e-12)

@@ -7,8 +7,9 @@
    and the time shift that best aligns model and recording there;
 4. screen every candidate effect on a grid across its parameter range, the base
    parameters re-centred on the recorded cycle and the residual projected off the base
-   fit's Jacobian (two simulations per point, points in parallel), fit the most promising ones fully (warm-started at their best point),
-   rank all by their error on the later, held-out cycles;
+   fit's Jacobian (two simulations per point, points in parallel); fit the most
+   promising ones fully, each started at its best point moved by one Gauss–Newton step
+   in the base parameters; rank all by their error on the later, held-out cycles;
 5. the verdict (:func:`pneunet.truth.core.verdict.decide`): ``adequate`` (base model at
    the floor), ``explained`` (the best effect, or it plus the next, brings the held-out
    error within ``tolerance`` × floor) or ``unexplained`` (and where it sits).
@@ -32,7 +33,7 @@ from .data import (compared_samples, read_trace, signal_of_column, signal_unit,
 from .effects import candidates_for
 from .fit import TraceFit, fit_trace, near_bound
 from .model import FIT_OPTIONS, TraceModel
-from .screen import SCREEN_KEEP, screen_candidates
+from .screen import SCREEN_KEEP, screen_candidates, step_starts
 
 
 @dataclass(repr=False)
@@ -244,11 +245,12 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
                                      ((build, fixed), {"options": options,
                                                        "typical_s": typical, "state": state}),
                                      data_fit, pool)
+            close = rows[:min(2, screen)] + [r for r in rows[2:screen]
+                                             if r["rss"] <= SCREEN_KEEP * rows[0]["rss"]]
+            step_starts(close, pool)
             timing["screen_s"] = time.perf_counter() - t0
             timing["screen_simulations"] = sum(r["simulations"] for r in rows)
             t0 = time.perf_counter()
-            close = rows[:min(2, screen)] + [r for r in rows[2:screen]
-                                             if r["rss"] <= SCREEN_KEEP * rows[0]["rss"]]
             for row in close:
                 eff = row["effect"]
                 if not math.isfinite(row["rss"]):
@@ -415,6 +417,7 @@ def _second_effects(fits, best, fitted, cand, params, fitting, model_setup, df, 
             others, names, np.log([first.values[k] for k in names]), first.extras["jacobian"],
             p2, ((build, fixed), {"options": options, "typical_s": typical, "state": state}),
             _fit_data(df, train, first), pool, on_top=first.effects)
+        step_starts(rows[:1], pool)
         if math.isfinite(rows[0]["rss"]):
             out.append((rows[0]["effect"], rows[0]["x"]))
     usable = [n for n in fitted[1:] if not _at_bound(fits[n])]

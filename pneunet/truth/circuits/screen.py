@@ -23,7 +23,9 @@ class ScreenTask:
     base fit's Jacobian J, ‖(I − J·J⁺)·r‖²: what no small move of the base parameters
     can remove (cycle alignment keeps the residual close to linear in them).  A
     Gauss–Newton step in them before the projection (a third simulation) changed no
-    study case's two best (benchmarks/README.md, the screen)."""
+    study case's two best (benchmarks/README.md, the screen); it is taken only at the
+    best point of a candidate that is fitted fully (:meth:`step`), whose fit it starts
+    closer to the right valley."""
 
     def __init__(self, effect, point, names, x_base, jac, bounds, model_args, data,
                  on_top=()):
@@ -45,15 +47,34 @@ class ScreenTask:
         if model.failures:
             return self._failed(model)
         left = r - self.jac @ np.linalg.lstsq(self.jac, r, rcond=None)[0]
+        return {"x": self._values(xb), "rss": float(left @ left), "simulations": model.calls,
+                "at": (xb, r)}
+
+    def step(self, at):
+        """The start values after one damped Gauss–Newton step in the base parameters
+        from ``at`` = (their ln values, the residual there) with the base fit's
+        Jacobian, at most :data:`SCREEN_STEP` in ln value (one simulation; kept where
+        it lowers the residual).  Returns (values, simulations)."""
+        xb, r = at
+        theta = np.log([self.point[k] for k in self.effect.params])
+        model = TraceModel(*self.model_args[0], effects=(*self.on_top, self.effect),
+                           budget=SCREEN_BUDGET, **self.model_args[1])
+        fun = TraceResidual(model, self.names + list(self.effect.params), *self.data)
+        step = np.linalg.lstsq(self.jac, -r, rcond=None)[0]
+        step *= min(1.0, SCREEN_STEP / max(np.max(np.abs(step)), 1e-300))
+        trial = np.clip(xb + step, *self.bounds)
+        r1 = fun(np.concatenate([trial, theta]))
+        better = not model.failures and r1 @ r1 < r @ r
+        return self._values(trial if better else xb), model.calls
+
+    def _values(self, xb):
         values = dict(zip(self.names, np.exp(xb)))
         values.update(self.point)
-        return {"x": values, "rss": float(left @ left), "simulations": model.calls}
+        return values
 
 
     def _failed(self, model):
-        values = dict(zip(self.names, np.exp(self.x_base)))
-        values.update(self.point)
-        return {"x": values, "rss": math.inf, "simulations": model.calls}
+        return {"x": self._values(self.x_base), "rss": math.inf, "simulations": model.calls}
 
     def _recentred(self, model, names, theta):
         """The base parameters moved so the simulated cycle's turning points, rise
@@ -80,6 +101,8 @@ class ScreenTask:
 #: tolerance); the best two always are (a control-line tube's screen merit is 1.5× a dead
 #: volume's in rms, and only its full fit reaches the floor)
 SCREEN_KEEP = 2.25
+#: largest change of a base parameter (ln value) in a kept candidate's start step
+SCREEN_STEP = 0.25
 #: a screening point's simulation budget, (× the base fit's typical simulation, at
 #: least s): a point that makes the circuit this much stiffer (a long thin tube with no
 #: volume) is a failed point, as it would be in a fit, not seconds lost
@@ -88,6 +111,10 @@ SCREEN_BUDGET = (5.0, 1.0)
 
 def _run_task(task):
     return task()
+
+
+def _run_step(task_at):
+    return task_at[0].step(task_at[1])
 
 
 def screen_candidates(cand, names, x_base, jac, params, model_args, data, pool, on_top=()):
@@ -102,8 +129,19 @@ def screen_candidates(cand, names, x_base, jac, params, model_args, data, pool, 
     outs = evaluate_many(_run_task, tasks, pool)
     rows = []
     for e in cand:
-        mine = [o for t, o in zip(tasks, outs) if t.effect is e]
-        best = min(mine, key=lambda o: o["rss"])
-        rows.append(dict(best, effect=e, simulations=sum(o["simulations"] for o in mine)))
+        mine = [(o, t) for t, o in zip(tasks, outs) if t.effect is e]
+        best, task = min(mine, key=lambda ot: ot[0]["rss"])
+        rows.append(dict(best, effect=e, task=task,
+                         simulations=sum(o["simulations"] for o, _ in mine)))
     rows.sort(key=lambda r: r["rss"])
     return rows
+
+
+def step_starts(rows, pool) -> None:
+    """Move the start values (``x``) of the screen ``rows`` that will be fitted fully
+    by one Gauss–Newton step each (:meth:`ScreenTask.step`, in parallel); rows that
+    failed everywhere are left as they are."""
+    todo = [r for r in rows if math.isfinite(r["rss"]) and "at" in r]
+    for row, (values, calls) in zip(todo, evaluate_many(
+            _run_step, [(r["task"], r.pop("at")) for r in todo], pool)):
+        row["x"], row["simulations"] = values, row["simulations"] + calls
