@@ -151,17 +151,14 @@ class ElementFamily:
         zero = np.zeros((self.n, n_ports))
         return zero, np.zeros((self.n, n_ports, n_ports)), None
 
-    #: whether :meth:`float_outflows` is available (set by families that have it)
+    #: whether this family has ``float_outflows(t, p, pdot, rows, partials)``:
+    #: :meth:`outflows` on Python floats for a small circuit — ``p``, ``pdot`` lists of
+    #: pressures and rates, ``rows`` each instance's indices of its ports' values in them;
+    #: it returns flat lists ``q`` (n·n_ports), ``dq_dp`` and ``dq_dpdot`` (n·n_ports²,
+    #: None without ``partials``; ``dq_dpdot`` None where zero), row-major like the
+    #: arrays' ravel and the same bits (:mod:`pneunet.engine.float_plan`).  Families
+    #: that have it set this True; the others are never asked for it.
     on_floats: bool = False
-
-    def float_outflows(self, t: float, p: list, pdot: list, rows: list, partials: bool):
-        """:meth:`outflows` on Python floats for a small circuit (``on_floats``):
-        ``p``, ``pdot`` lists of pressures and rates, ``rows`` each instance's indices of
-        its ports' values in them; returns flat lists ``q``
-        (n·n_ports), ``dq_dp`` and ``dq_dpdot`` (n·n_ports², None without ``partials``;
-        ``dq_dpdot`` None where zero), row-major like the arrays' ravel and the same
-        bits (:mod:`pneunet.engine.float_plan`)."""
-        raise NotImplementedError
 
     def flows(self, t, p: np.ndarray, pdot: np.ndarray) -> np.ndarray:
         """Flows out of each port's node, shape (..., n, n_ports), no partials.
