@@ -111,7 +111,8 @@ class CircuitDAE:
         diag = np.arange(self.n)
         keys = np.unique(np.concatenate([cols * self.n + rows, diag * self.n + diag]))
         self._csc_indices = (keys % self.n).astype(np.int32)
-        self._csc_indptr = np.searchsorted(keys // self.n, np.arange(self.n + 1)).astype(np.int32)
+        # keys are sorted by column: column j starts at the first key ≥ j·n
+        self._csc_indptr = np.searchsorted(keys, np.arange(self.n + 1) * self.n).astype(np.int32)
         self.nnz = len(keys)
         self._diagonal_at = np.searchsorted(keys, diag * self.n + diag)  # CSC data positions
         pos = np.searchsorted(keys, cols * self.n + rows)
@@ -123,11 +124,13 @@ class CircuitDAE:
         self._pinned = [(b.family, b.port_node[:, list(b.family.pinned_ports)])
                         for b in blocks if b.family.pinned_ports]
         # every port flow and port-pair partial of every family goes to one buffer; one
-        # bincount sums them per node / per CSC entry (index n / nnz: a fixed node, dropped)
+        # bincount sums them per node / per CSC entry, cut at n / nnz: the bins of fixed
+        # nodes (index ≥ n) and of pairs with a fixed port (index nnz) are dropped.  Every
+        # unknown and every stored entry (the diagonal too) gets a term, so the bincounts
+        # are never shorter than the cut
         flow_to, partial_to = [], []
         for block in blocks:
-            node = np.where(block.port_node < self.n, block.port_node, self.n).ravel()
-            flow_to.append(node)
+            flow_to.append(block.port_node.ravel())
             pair = np.full(block.port_node.size * block.port_node.shape[1], self.nnz)
             pair[block.jac_flat] = block.jac_pos
             partial_to.append(pair)
@@ -212,11 +215,10 @@ class CircuitDAE:
                 partials[block.partials] = (dq_dp if dq_dpdot is None
                                             else dq_dp + cj * dq_dpdot).ravel()
             flows[block.flows] = q.ravel()
-        res = np.bincount(self._flow_to, weights=flows, minlength=self.n + 1)[:self.n]
+        res = np.bincount(self._flow_to, weights=flows)[:self.n]
         if cj is None:
             return res, None
-        return res, np.bincount(self._partial_to, weights=partials,
-                                minlength=self.nnz + 1)[:self.nnz]
+        return res, np.bincount(self._partial_to, weights=partials)[:self.nnz]
 
     def algebraic_block(self) -> "AlgebraicBlock":
         """F_a and ∂F_a/∂y_a with ẏ = 0, from only the elements at algebraic nodes."""
@@ -401,9 +403,8 @@ class AlgebraicBlock:
             members = np.flatnonzero(on.any(axis=1))
             if not members.size:
                 continue
-            fam = block.family
-            if members.size < fam.n:  # the same family over fewer instances
-                fam = type(fam)([fam.specs[k] for k in members], fam.context)
+            fam = block.family  # the same family over those instances only
+            fam = type(fam)([fam.specs[k] for k in members], fam.context)
             at, on = local[block.port_node[members]], on[members]
             pairs = on[:, :, None] & on[:, None, :]
             flow_at, pair_at = np.flatnonzero(on.ravel()), np.flatnonzero(pairs.ravel())
@@ -424,7 +425,6 @@ class AlgebraicBlock:
         self.floats = None  # the block on Python floats (small circuits), if it has one
         if self.dense:
             self._pair_to = rows * na + cols  # row-major position in the dense block
-            self._n_entries = na * na
             if on_floats(part[0] for part in self._parts):
                 self.floats = FloatAlgebraicBlock(dae, [
                     (fam, nodes, list(zip(flow_at.tolist(), to.tolist())),
@@ -434,9 +434,8 @@ class AlgebraicBlock:
         else:
             from scipy.sparse import csc_matrix
 
-            self._n_entries = keys.size
-            self._matrix = csc_matrix((np.ones(keys.size), (keys % na, keys // na)),
-                                      shape=(na, na))
+            # duplicate (row, column) pairs summed: one stored entry per key, in key order
+            self._matrix = csc_matrix((np.ones(rows.size), (rows, cols)), shape=(na, na))
             self._matrix.sort_indices()
 
     def evaluate(self, t, y, residual=True):
@@ -452,7 +451,7 @@ class AlgebraicBlock:
                 flows[flow_slice] = q.ravel()[flow_at]
             partials[pair_slice] = dq_dp.ravel()[pair_at]
         res = np.bincount(self._flow_to, weights=flows, minlength=self.size) if residual else None
-        data = np.bincount(self._pair_to, weights=partials, minlength=self._n_entries)
+        data = np.bincount(self._pair_to, weights=partials)  # each entry's last bin is hit
         scale = np.bincount(self._rows, weights=np.abs(partials), minlength=self.size)
         if self.dense:
             jac = data.reshape(self.size, self.size)
@@ -465,8 +464,6 @@ class AlgebraicBlock:
 def distinct_times(times: list[np.ndarray]) -> np.ndarray:
     """Sorted times (s) with those equal up to rounding (1e-12 relative) merged: sources
     whose corners coincide in exact arithmetic (16 + 0.01 and 2·8 + 0.01) give one stop."""
-    t = np.unique(np.concatenate(times)) if times else np.empty(0)
-    if t.size < 2:
-        return t
+    t = np.unique(np.concatenate([np.empty(0), *times]))
     keep = np.diff(t) > 1e-12 * np.maximum(np.abs(t[1:]), 1.0)
-    return t[np.concatenate([[True], keep])]
+    return np.concatenate([t[:1], t[1:][keep]])
