@@ -46,8 +46,12 @@ MODULES = {
                  "tests/netlist/test_include_rules.py tests/netlist/test_includes.py"),
     "assembly": ("pneunet/engine/assembly.py",
                  "tests/core/test_assembly.py tests/core/test_algebraic_block.py "
-                 "tests/core/test_element_conformance.py "
-                 "-k 'assembly or algebraic or jacobian or fast_flows'"),
+                 "tests/core/test_element_conformance.py tests/core/test_float_plan.py "
+                 "-k 'assembly or algebraic or jacobian or fast_flows or floats_equal "
+                 "or without_a_float_path'"),
+    "float_plan": ("pneunet/engine/float_plan.py",
+                   "tests/core/test_float_plan.py tests/core/test_algebraic_block.py "
+                   "tests/core/test_assembly.py"),
     "valves": ("pneunet/physics/elements/valves.py",
                "tests/core/test_valve_family_routes.py tests/core/test_valve_law_reference.py "
                "tests/core/test_scalar_laws.py tests/core/test_element_conformance.py "
