@@ -32,7 +32,7 @@ class FloatPlan:
             pair_to = list(zip(block.jac_flat.tolist(), block.jac_pos.tolist()))
             self._parts.append((block.family, block.port_node.tolist(), flow_to, pair_to))
 
-    def evaluate(self, t, y, ydot, cj=None):
+    def evaluate(self, t, y, ydot, cj):
         p, pdot = self.dae._pressures_at(t, y, ydot)
         p, pdot = p.tolist(), pdot.tolist()
         res = [0.0] * self.dae.n
@@ -61,9 +61,9 @@ class FloatAlgebraicBlock:
         flat pair index → (dense position, row)) in the block's buffer order."""
         self.dae, self.size = dae, size
         self._parts = [(fam, nodes.tolist(), flows, pairs) for fam, nodes, flows, pairs in parts]
-        self._zeros = [0.0] * (dae.n + len(dae.fixed_names))
+        self._zeros = [0.0] * len(dae._pdot)  # ẏ = 0 at every node
 
-    def evaluate(self, t, y, residual=True):
+    def evaluate(self, t, y, residual):
         res, data, scale = self.lists(t, y, residual)
         return (np.array(res) if residual else None, np.array(data).reshape(self.size, self.size),
                 np.array(scale))
