@@ -89,17 +89,40 @@ def _gas_volumes(circuit, names=None):
 class _VolumesEffect(CircuitEffect):
     """An effect on the gas volumes of a circuit: bound by :meth:`candidates` to the
     volumes the circuit has, so that a volume another effect adds (a tube's, a dead
-    volume) is not changed with them, whatever order the effects are applied in."""
+    volume) is not changed with them, whatever order the effects are applied in.
 
-    def __init__(self, volumes: tuple | None = None):
+    With ``site`` the effect acts on its one volume alone (``name@volume``, parameters
+    ``param@volume``): where a circuit has several volumes, one may show the effect
+    while the others do not (a small fast volume beside a large slow one), or each with
+    its own value (two site effects fitted as a pair)."""
+
+    def __init__(self, volumes: tuple | None = None, site: bool = False):
         self.volumes = None if volumes is None else tuple(volumes)
+        self.site = site
+        if site:
+            if self.volumes is None or len(self.volumes) != 1:
+                raise ParameterError(f"{self.name}: a site effect acts on one volume, "
+                                     f"got {self.volumes}")
+            (v,) = self.volumes
+            self.name = f"{type(self).name}@{v}"
+            self.params = {f"{k}@{v}": r for k, r in type(self).params.items()}
 
     def candidates(self, circuit):
-        found = _gas_volumes(circuit)
-        return [type(self)(tuple(s.name for s in found))] if found else []
+        """Every volume at once, and each on its own where there are several (a site
+        effect: itself)."""
+        if self.site:
+            return [self]
+        names = tuple(s.name for s in _gas_volumes(circuit))
+        if not names:
+            return []
+        return [type(self)(names)] + ([type(self)((n,), site=True) for n in names]
+                                      if len(names) > 1 else [])
 
     def _targets(self, circuit):
         return _gas_volumes(circuit, self.volumes)
+
+    def _value(self, values, key) -> float:
+        return float(values[f"{key}@{self.volumes[0]}" if self.site else key])
 
 
 class PolytropicVolume(_VolumesEffect):
@@ -113,7 +136,7 @@ class PolytropicVolume(_VolumesEffect):
 
     def apply(self, circuit, values):
         for spec in self._targets(circuit):
-            spec.params["n"] = float(values["n"])
+            spec.params["n"] = self._value(values, "n")
 
 
 class VolumeHeatTransfer(_VolumesEffect):
@@ -143,8 +166,8 @@ class VolumeHeatTransfer(_VolumesEffect):
             del circuit.elements[spec.name]
             lines = _lines_at(circuit, node)
             kind = "thermal_volume" if len(lines) <= 1 else "thermal_chamber"
-            circuit.add(kind, spec.name, (node, heat), V=float(V), tau=float(values["tau"]),
-                        p0=p0)
+            circuit.add(kind, spec.name, (node, heat), V=float(V),
+                        tau=self._value(values, "tau"), p0=p0)
             if kind == "thermal_chamber":
                 for line, k in lines:
                     nodes = list(line.nodes)
