@@ -20,8 +20,10 @@ def _ladder(cells=6):
     return c
 
 
-@pytest.mark.parametrize("dense_limit", [40, 0])
-def test_algebraic_block_matches_the_full_jacobian(dense_limit):
+@pytest.mark.parametrize("dense_limit, floats", [(40, True), (40, False), (0, False)])
+def test_algebraic_block_matches_the_full_jacobian(dense_limit, floats):
+    """Dense on floats (six valves), dense on arrays (the route of larger circuits) and
+    sparse, each against the full Jacobian's algebraic rows and columns."""
     dae = CircuitDAE(_ladder())
     alg = dae.algebraic_idx
     assert 1 < alg.size < dae.n
@@ -29,6 +31,9 @@ def test_algebraic_block_matches_the_full_jacobian(dense_limit):
     res, data = dae.evaluate(0.0, y, np.zeros(dae.n), cj=0.0)
     full = dae.dense(data)
     block = AlgebraicBlock(dae, dense_limit=dense_limit)
+    assert (block.floats is not None) == (dense_limit > 0)
+    if not floats:
+        block.floats = None
     res_a, jac, scale_a = block.evaluate(0.0, y)
     jac = jac if isinstance(jac, np.ndarray) else jac.toarray()
     np.testing.assert_allclose(res_a, res[alg], rtol=1e-13, atol=1e-12)

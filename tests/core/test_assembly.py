@@ -215,8 +215,12 @@ def test_a_row_without_any_slope_is_scaled_by_the_floor():
     c.pressure_source("PC", "k", 600.0)
     c.valve("X1", "s", "b", "k", PAPER_VALVES["axi"])
     c.valve("X2", "b", "atm", "k", PAPER_VALVES["axi"])
-    res, jac, scale = AlgebraicBlock(CircuitDAE(c)).evaluate(0.0, np.array([150.0]))
-    assert res.tolist() == [0.0] and jac.tolist() == [[0.0]] and scale.tolist() == [1e-300]
+    on_floats, on_arrays = AlgebraicBlock(CircuitDAE(c)), AlgebraicBlock(CircuitDAE(c))
+    on_arrays.floats = None
+    assert on_floats.floats is not None  # two valves: on floats; both routes floor it
+    for block in (on_floats, on_arrays):
+        res, jac, scale = block.evaluate(0.0, np.array([150.0]))
+        assert res.tolist() == [0.0] and jac.tolist() == [[0.0]] and scale.tolist() == [1e-300]
 
 
 def test_the_pattern_of_a_chain_is_tridiagonal():
