@@ -47,8 +47,9 @@ MODULES = {
     "assembly": ("pneunet/engine/assembly.py",
                  "tests/core/test_assembly.py tests/core/test_algebraic_block.py "
                  "tests/core/test_element_conformance.py tests/core/test_float_plan.py "
+                 "tests/core/test_valve_family_routes.py "
                  "-k 'assembly or algebraic or jacobian or fast_flows or floats_equal "
-                 "or without_a_float_path'"),
+                 "or without_a_float_path or users_valve_has_no_dp'"),
     "float_plan": ("pneunet/engine/float_plan.py",
                    "tests/core/test_float_plan.py tests/core/test_algebraic_block.py "
                    "tests/core/test_assembly.py"),
