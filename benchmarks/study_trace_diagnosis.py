@@ -11,12 +11,19 @@ Each recording comes from a model written out by hand and integrated by scipy
   actuator through a 0.24 kPa·s/mg line (the netlist says 0.2), both valves switched by
   antiphase pulses every 5 s, recorded at 100 Hz for 30 s from a random time 0–20 s on
   the sources' clock, p_act and p_muscle, 0.3 kPa noise.  Fitted the line's R and V.
+* ``inverter`` cases: the chain of two inverters (netlists/inverter.pn; generator
+  tests/traces/standalone_inverter.py) with R_pull 23 kPa·s/mg (the netlist says 20),
+  the first gate's control a 4 s PULSE, recorded at 50 Hz for 20 s from a random time
+  0–8 s on the sources' clock, p_out1 and p_out2, 0.3 kPa noise.  Fitted R_pull and both
+  output volumes.  A dead volume at out1 is more of out1's fitted volume: the right
+  answer there is ``adequate`` with X1.Vout.V at 2 mL + the dead volume.
 
 Every registered circuit effect is a candidate.
 
     python benchmarks/study_trace_diagnosis.py                 # every oscillator case
     python benchmarks/study_trace_diagnosis.py --mid-run       # the same, started mid-run
     python benchmarks/study_trace_diagnosis.py --driven        # the driven circuit's cases
+    python benchmarks/study_trace_diagnosis.py --inverter      # the inverter chain's cases
     python benchmarks/study_trace_diagnosis.py clean side      # some cases
     options: --seed N
 """
@@ -61,6 +68,19 @@ DRIVEN = {
 DRIVEN_PARAMS = {"Rtube.R": (0.2, 0.02, 2.0), "Amck.V": (25.0, 5.0, 200.0)}
 DRIVEN_TRUTH = {"Rtube.R": 0.24, "Amck.V": 30.0}
 
+#: inverter case → (stand-alone keywords, what a right answer is)
+INVERTER = {
+    "clean": ({}, "adequate"),
+    "heat-transfer": ({"heat_tau": 0.5}, "volume_heat_transfer@X1.Vout"),
+    "dead-volume": ({"dead_volume": 1.5}, "adequate"),  # X1.Vout.V fitted at 3.5 mL
+    "control-tube": ({"tube_ctrl": (20.0, 1.0)}, "tube@X2.Xv.ctrl"),
+    "leak": ({"leak": 40.0}, "unexplained"),
+    "compliant": ({"compliance": 0.004}, "unexplained"),
+}
+INVERTER_PARAMS = {"Rpull": (20.0, 2.0, 200.0), "X1.Vout.V": (2.5, 0.2, 20.0),
+                   "X2.Vout.V": (2.5, 0.2, 20.0)}
+INVERTER_TRUTH = {"Rpull": 23.0, "X1.Vout.V": 2.0, "X2.Vout.V": 2.0}
+
 
 def oscillator_case(name, seed, mid_run):
     from pneunet.design.circuits import oscillator
@@ -86,6 +106,37 @@ def driven_case(name, seed):
             "muscle", expected, start)
 
 
+def inverter_case(name, seed):
+    from pneunet.netlist.builder import NetlistBuilder
+    from tests.traces.standalone_inverter import inverter_record
+
+    kw, expected = INVERTER[name]
+    start = float(np.random.default_rng([seed, 9]).uniform(0.0, 8.0))
+    rec = inverter_record(start, 20.0, dt=0.02, noise=0.3, seed=seed,
+                          Rpull=INVERTER_TRUTH["Rpull"], **kw)
+    return (rec, NetlistBuilder(str(ROOT / "netlists" / "inverter.pn")), INVERTER_PARAMS,
+            "out1", expected, start)
+
+
+def inverter_truth(name) -> dict:
+    """The values the right model of an inverter case has (its effect's too)."""
+    kw = INVERTER[name][0]
+    truth = dict(INVERTER_TRUTH)
+    truth["X1.Vout.V"] += kw.get("dead_volume", 0.0)
+    if "tube_ctrl" in kw:
+        truth["R_tube@X2.Xv.ctrl"], truth["V_tube@X2.Xv.ctrl"] = kw["tube_ctrl"]
+    if "heat_tau" in kw:
+        truth["tau@X1.Vout"] = kw["heat_tau"]
+    return truth
+
+
+def covered(d, truth) -> str:
+    """Which of the final fit's 95 % intervals cover the truth."""
+    ci = d.final.ci
+    return ", ".join(f"{k} {'ok' if ci[k][0] <= v <= ci[k][1] else 'MISS'}"
+                     for k, v in truth.items() if k in ci)
+
+
 def right(d, expected) -> bool:
     if expected in ("adequate", "unexplained"):
         return d.verdict == expected
@@ -99,16 +150,20 @@ def main(argv=None) -> None:
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--mid-run", action="store_true", help="oscillator logger started mid-run")
     ap.add_argument("--driven", action="store_true", help="the driven amplifier's cases")
+    ap.add_argument("--inverter", action="store_true", help="the inverter chain's cases")
     args = ap.parse_args(argv)
 
     from pneunet.truth.circuits import diagnose_trace
 
-    table = DRIVEN if args.driven else CASES
+    table = INVERTER if args.inverter else DRIVEN if args.driven else CASES
     print("| case | start s | expected | verdict | accepted | held-out / floor (base → final) | "
-          "start state | right | time s (base, screen, fits) | simulations |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
+          "start state | right | time s (base, screen, fits) | simulations |"
+          + (" 95 % intervals vs truth |" if args.inverter else ""))
+    print("|---|---|---|---|---|---|---|---|---|---|" + ("---|" if args.inverter else ""))
     for name in args.cases or list(table):
-        if args.driven:
+        if args.inverter:
+            rec, build, params, node, expected, start = inverter_case(name, args.seed)
+        elif args.driven:
             rec, build, params, node, expected, start = driven_case(name, args.seed)
         else:
             rec, build, params, node, expected, start = oscillator_case(name, args.seed,
@@ -123,7 +178,8 @@ def main(argv=None) -> None:
               f"{'yes' if right(d, expected) else 'NO'} | {wall:.0f} ("
               + ", ".join(f"{d.timing.get(k, 0):.0f}" for k in ("base_fit_s", "screen_s",
                                                                   "candidate_fits_s"))
-              + f") | {d.timing.get('simulations', 0) + d.timing.get('screen_simulations', 0)} |",
+              + f") | {d.timing.get('simulations', 0) + d.timing.get('screen_simulations', 0)} |"
+              + (f" {covered(d, inverter_truth(name))} |" if args.inverter else ""),
               flush=True)
 
 

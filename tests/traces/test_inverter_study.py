@@ -1,0 +1,48 @@
+"""The trace diagnosis on a third circuit, never studied before: the two-inverter chain of
+``netlists/inverter.pn`` (``python -m pytest -m study_long``; the clean case takes ~5 s,
+the control-line tube ~3 min on 2 cores; ``benchmarks/study_trace_diagnosis.py
+--inverter`` runs every case for its table).
+
+Stand-alone recordings (:mod:`.standalone_inverter`): R_pull 23 kPa·s/mg (the netlist
+says 20), p_out1 and p_out2 at 50 Hz for 20 s from a random time on the sources' clock,
+0.3 kPa noise; fitted R_pull and both output volumes from guesses 13–25 % off.
+"""
+import numpy as np
+import pytest
+
+from pneunet.netlist.builder import NetlistBuilder
+from pneunet.truth.circuits import diagnose_trace
+
+from .standalone_inverter import inverter_record
+
+PARAMS = {"Rpull": (20.0, 2.0, 200.0), "X1.Vout.V": (2.5, 0.2, 20.0),
+          "X2.Vout.V": (2.5, 0.2, 20.0)}
+TRUTH = {"Rpull": 23.0, "X1.Vout.V": 2.0, "X2.Vout.V": 2.0}
+
+
+def diagnose(**hidden):
+    start = float(np.random.default_rng([1, 9]).uniform(0.0, 8.0))  # 5.44 s
+    rec = inverter_record(start, 20.0, dt=0.02, noise=0.3, seed=1, Rpull=TRUTH["Rpull"],
+                          **hidden)
+    return diagnose_trace(NetlistBuilder("netlists/inverter.pn"), rec, PARAMS, node="out1")
+
+
+def covers(d, truth):
+    ci = d.final.ci
+    return {k: ci[k][0] <= v <= ci[k][1] for k, v in truth.items()}
+
+
+@pytest.mark.study_long
+def test_clean_inverter_chain_is_adequate_and_covered():
+    d = diagnose()
+    assert d.verdict == "adequate", d.report()
+    assert d.final.start_state.driven
+    assert all(covers(d, TRUTH).values()), (covers(d, TRUTH), d.report())
+
+
+@pytest.mark.study_long
+def test_tube_on_the_second_gates_control_line_is_named_and_covered():
+    d = diagnose(tube_ctrl=(20.0, 1.0))
+    assert d.verdict == "explained" and d.accepted == ["tube@X2.Xv.ctrl"], d.report()
+    truth = {**TRUTH, "R_tube@X2.Xv.ctrl": 20.0, "V_tube@X2.Xv.ctrl": 1.0}
+    assert all(covers(d, truth).values()), (covers(d, truth), d.report())
