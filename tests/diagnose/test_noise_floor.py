@@ -68,3 +68,19 @@ def test_segments_number_the_runs_and_isolate_each_gap():
     # used as groups, no difference spans a gap
     r = np.arange(8.0) ** 2
     np.testing.assert_array_equal(second_differences(r, g, centres=True)[1], [5])
+
+
+def test_a_valve_flow_logged_in_whole_steps_has_at_least_its_rounding_as_floor():
+    """Flows displayed in steps of 2 mg/s with 0.05 mg/s of meter noise: the floor of a
+    right model is the rounding's 2/√12 mg/s (second differences alone gave 0.35)."""
+    from pneunet.truth.valves.diagnose.features import noise_floor, prepare
+    from pneunet.truth.valves.diagnose.scenarios import bench, scenario_truth
+
+    truth = scenario_truth("clean")
+    data = bench(truth, seed=4, reduced=True, noise_mdot=0.05, noise_rel=0.0, noise_p=0.0)
+    data["mdot_mg_s"] = np.round(data["mdot_mg_s"] / 2.0) * 2.0
+    df, _ = prepare(data)
+    pred = truth(df)
+    est = noise_floor(df, df["mdot_mg_s"].to_numpy() - pred, pred)
+    assert est["rmse"] == pytest.approx(2.0 / np.sqrt(12.0), rel=0.1)
+    assert all(s >= 2.0 / np.sqrt(12.0) for _, _, s, _ in est["bins"])

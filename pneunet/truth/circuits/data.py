@@ -287,16 +287,17 @@ SWING_SIGMAS = 20.0
 
 
 def swings(y) -> bool:
-    """Whether the recorded signal ``y`` moves by more than its noise over its second
-    half (see :data:`SWING_SIGMAS`)."""
-    from ..core.noise import difference_sigma
+    """Whether the recorded signal ``y`` moves by more than its noise (second
+    differences, at least its rounding to a logger's grid) over its second half (see
+    :data:`SWING_SIGMAS`)."""
+    from ..core.noise import difference_sigma, rounding_sigma
 
     y = np.asarray(y, float)
     half = y[len(y) // 2:]
     if len(half) < 5:
         return False
     swing = float(np.percentile(half, 99) - np.percentile(half, 1))
-    sigma = difference_sigma(y)
+    sigma = max(difference_sigma(y), rounding_sigma(y))
     return swing > SWING_SIGMAS * (sigma if sigma > 0 else 0.0)
 
 

@@ -25,7 +25,7 @@ import numpy as np
 from ...common.errors import SolverError
 from ...common.reprs import Summarized, listed, number
 from ..core.locate import best_lag, hot_phases, phase_profile
-from ..core.noise import difference_sigma, segments
+from ..core.noise import ROUNDING_SIGMA, difference_sigma, resolution, segments
 from ..core.verdict import TOLERANCE, Step, at_floor, decide
 from ..core.waterfall import Waterfall
 from .data import (compared_samples, read_trace, signal_of_column, signal_unit,
@@ -106,23 +106,34 @@ def _num(v):
     return None if v is None or not math.isfinite(float(v)) else float(v)
 
 
-def noise_floor(fit: TraceFit) -> dict:
+def noise_floor(fit: TraceFit, grid: dict | None = None) -> dict:
     """Noise floor of a fit's residuals over the whole record: per signal, σ from
-    robust second differences within the runs of compared samples; pooled as the rms
-    over signals (in the fit's unit)."""
+    robust second differences within the runs of compared samples, at least the
+    rounding of a signal recorded on a grid (``grid``: {signal: step in its unit},
+    :func:`~pneunet.truth.core.noise.resolution`; step/√12); pooled as the rms over
+    signals (in the fit's unit)."""
     out, pooled = {}, []
+    grid = grid or {}
     for s in fit.signals():
-        r = fit.residuals[s].to_numpy() / fit.scales.get(s, 1.0)
+        scale = fit.scales.get(s, 1.0)
+        r = fit.residuals[s].to_numpy() / scale
         ok = np.isfinite(r)
         sigma = difference_sigma(r, segments(ok))
+        if math.isfinite(sigma):
+            sigma = float(max(sigma, grid.get(s, 0.0) * ROUNDING_SIGMA / scale))
         out[s] = sigma
         if math.isfinite(sigma):
             pooled.append((sigma ** 2, int(ok.sum())))
     total = sum(w for _, w in pooled)
     floor = math.sqrt(sum(v * w for v, w in pooled) / total) if total else float("nan")
-    return {"floor": floor, "per_signal": out,
-            "method": "1.4826·MAD of the residuals' second differences / √6, per signal over "
-                      "the whole record (jump samples left out), pooled rms"}
+    method = ("1.4826·MAD of the residuals' second differences / √6, per signal over "
+              "the whole record (jump samples left out), pooled rms")
+    grid = {s: q for s, q in grid.items() if q > 0 and s in out}
+    if grid:
+        method += ("; at least the rounding of a signal logged on a grid, step/√12 ("
+                   + ", ".join(f"{s} in steps of {q:.3g} {signal_unit(s)}".rstrip()
+                               for s, q in grid.items()) + ")")
+    return {"floor": floor, "per_signal": out, "method": method, "resolution": grid}
 
 
 def signal_table(base: TraceFit, final: TraceFit, test, noise: dict,
@@ -221,7 +232,8 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
         params = {**params, **{k: v for k, v in state.fitted.items() if k not in params}}
         timing["base_fit_s"] = time.perf_counter() - t0
         fits = {"none": base}
-        noise = noise_floor(base)
+        grid = {signal_of_column(c): resolution(df[c]) for c in df.columns if c != "time_s"}
+        noise = noise_floor(base, grid)
         floor = noise["floor"]
         unit = base.unit
         base_err = base.error(test)
@@ -290,7 +302,7 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
                 best = fitted[0]
                 steps.append(Step(best, fits[best].error(test), effects=(best,)))
                 # noise floor from the best model too: less misfit leaks into it
-                nb = noise_floor(fits[best])
+                nb = noise_floor(fits[best], grid)
                 if nb["floor"] < floor:
                     noise, floor = nb, nb["floor"]
                     noise["model"] = best

@@ -133,15 +133,16 @@ def first_value(t, y, n: int = FIRST_SAMPLES) -> tuple[float, float]:
     """(value at t[0], its standard error) of a parabola through the first samples
     before the first jump (:func:`~pneunet.truth.circuits.data.jump_samples`): the most of
     them, at most ``n``, that a parabola fits within their noise (the noise from the
-    whole column's second differences), so a corner (a valve switching) soon after the
-    first sample does not bend the estimate."""
-    from ..core.noise import difference_sigma
+    whole column's second differences, at least its rounding to a logger's grid), so a
+    corner (a valve switching) soon after the first sample does not bend the
+    estimate."""
+    from ..core.noise import difference_sigma, rounding_sigma
     from .data import jump_samples
 
     t, y = np.asarray(t, float), np.asarray(y, float)
     jumps = jump_samples(y)
     m = min(n, len(y), int(jumps[0]) + 1 if len(jumps) else len(y))
-    sigma = difference_sigma(y)
+    sigma = max(difference_sigma(y), rounding_sigma(y))
     if m < 4 or not sigma > 0:
         return float(y[0]), float(sigma) if sigma > 0 else float("nan")
     for k in range(m, 3, -1):

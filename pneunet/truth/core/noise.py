@@ -50,7 +50,8 @@ def record_sigma(y, groups=None, order: int = 4, min_points: int = 10) -> float:
     normalised MAD of its ``order``-th differences within each group, / √C(2k, k) (70
     for k = 4).  A smooth signal's curvature cancels here where second differences keep
     it (a 100 mm swing of period 6 s at 20 Hz: second differences 0.1 mm, fourth
-    0.001 mm).  NaN with fewer than ``min_points`` differences."""
+    0.001 mm).  At least the rounding of a signal logged on a grid
+    (:func:`rounding_sigma`).  NaN with fewer than ``min_points`` differences."""
     from math import comb
 
     y = np.asarray(y, float)
@@ -65,7 +66,44 @@ def record_sigma(y, groups=None, order: int = 4, min_points: int = 10) -> float:
     if len(d) < min_points:
         return float("nan")
     spread = MAD_TO_SIGMA * np.median(np.abs(d - np.median(d)))
-    return float(spread / np.sqrt(comb(2 * order, order)))
+    return float(max(spread / np.sqrt(comb(2 * order, order)), rounding_sigma(y)))
+
+
+#: standard deviation of rounding to a grid of step q, in q: uniform on ±q/2
+ROUNDING_SIGMA = 1.0 / np.sqrt(12.0)
+
+
+def resolution(y) -> float:
+    """The step of the grid that a recorded signal's values lie on (a logger's or an
+    ADC's resolution, in y's unit: 1.0 for whole kPa), 0.0 when they lie on none.
+
+    Rounding to a step q adds an error of standard deviation q/√12 to every sample
+    (:data:`ROUNDING_SIGMA`).  Differences do not see it where the signal is flat for
+    longer than a step (every sample rounds the same way), so a noise floor taken from
+    differences falls towards 0 on a quiet record logged in whole units.  The step is
+    the smallest gap between neighbouring distinct values when every such gap is a
+    whole number of it (within 1 %; an offset grid a·n + b too).  A grid much finer
+    than the spacing of the values is not seen, and need not be: its rounding is far
+    below any noise."""
+    y = np.asarray(y, float)
+    u = np.unique(y[np.isfinite(y)])
+    if len(u) < 3:
+        return 0.0
+    # values a float's last digits apart (0.1·3 against 0.3) are one value
+    u = u[np.concatenate([[True], np.diff(u) > 1e-9 * np.max(np.abs(u))])]
+    if len(u) < 3:
+        return 0.0
+    gaps = np.diff(u)
+    steps = gaps / np.min(gaps)
+    if float(np.max(np.abs(steps - np.round(steps)))) > 0.01:
+        return 0.0
+    return float((u[-1] - u[0]) / np.sum(np.round(steps)))
+
+
+def rounding_sigma(y) -> float:
+    """Standard deviation of the rounding in a recorded signal ``y``: its
+    :func:`resolution` / √12 (0.0 when it lies on no grid)."""
+    return resolution(y) * ROUNDING_SIGMA
 
 
 def segments(mask) -> np.ndarray:

@@ -115,13 +115,17 @@ def noise_floor(df: pd.DataFrame, resid: np.ndarray, pred: np.ndarray, n_bins=8)
     variance 6σ².  Robust (median-based) per bin of predicted flow, so the
     estimate follows flow-dependent noise and ignores the few points where the
     misfit is sharp (the opening flank).  Returns ``{"rmse": σ_floor, "bins":
-    [(flow_lo, flow_hi, σ, n)]}`` with σ_floor the RMS over all points.
+    [(flow_lo, flow_hi, σ, n)]}`` with σ_floor the RMS over all points.  Every σ is at
+    least the rounding of a flow logged on a grid (a meter's display in whole units:
+    step/√12, :func:`~pneunet.truth.core.noise.rounding_sigma`), which differences do not
+    see where the flow is flat (a closed valve).
     """
-    from ...core.noise import robust_sigma, second_differences
+    from ...core.noise import robust_sigma, rounding_sigma, second_differences
 
     d2, idx = second_differences(resid, df["group"].to_numpy(), centres=True)
     if len(idx) < 30:
         return {"rmse": float("nan"), "bins": []}
+    rounding = rounding_sigma(df["mdot_mg_s"]) if "mdot_mg_s" in df else 0.0
     m = np.abs(pred[idx])
     mp = np.abs(pred)
     closed_cut = 1.0
@@ -137,7 +141,7 @@ def noise_floor(df: pd.DataFrame, resid: np.ndarray, pred: np.ndarray, n_bins=8)
         sel = which == b
         if sel.sum() < 10:
             continue
-        s = robust_sigma(d2[sel])
+        s = max(robust_sigma(d2[sel]), rounding)
         sig_bin[b] = s
         bins.append((float(edges[b]), float(edges[b + 1]), float(s), int(sel.sum())))
     if not sig_bin:
