@@ -109,3 +109,48 @@ def test_one_node_relaxation_and_indicator_on_floats_equal_the_array_path(monkey
         monitor._one = None
         assert kappa == monitor.indicator(t, y)
         monitor._one = dae.algebraic_block().floats
+
+
+def _divider(low, r):
+    """b between a 300 kPa source and ``low`` through two resistors R: one algebraic node."""
+    c = Circuit("divider", ambient=96.0)
+    c.pressure_source("PH", "high", 300.0)
+    c.pressure_source("PL", "low", low)
+    c.resistor("R1", "high", "b", r)
+    c.resistor("R2", "b", "low", r)
+    return c
+
+
+def _closed():
+    """b between two valves held closed: zero residual, every partial zero."""
+    c = Circuit("closed", ambient=96.0)
+    c.pressure_source("P1", "s", 200.0)
+    c.pressure_source("PC", "k", 600.0)
+    c.valve("X1", "s", "b", "k", PAPER_VALVES["axi"])
+    c.valve("X2", "b", "atm", "k", PAPER_VALVES["axi"])
+    return c
+
+
+@pytest.mark.parametrize("build, starts, lands", [
+    (lambda: _divider(300.0, 2.0), [300.0], False),        # at equilibrium: zero residual
+    (_closed, [150.0], False),                             # zero residual, scale at its floor
+    (lambda: _divider(96.0, 50.0), [120.0, 200.0, 290.0], True)],  # slope below 1
+    ids=["equilibrium", "closed", "weak"])
+def test_one_node_relaxation_on_floats_at_states_a_transient_does_not_visit(build, starts,
+                                                                           lands):
+    """The float relaxation equals the array path also where the residual is exactly zero
+    (no step goes along the flow, nothing is divided by zero) and on a node whose slope
+    J_aa is below 1 mg/(s·kPa) (the landing's stability test is J_aa > 0, not > 1)."""
+    from pneunet.engine.solvers import folds
+
+    dae = CircuitDAE(build())
+    monitor = folds.FoldMonitor(dae, dae.options.fold_threshold)
+    assert dae.n == 1 and monitor._one is not None
+    for b in starts:
+        y = np.array([b])
+        one, ref = monitor._relax_one(1.0, y), monitor._relax(1.0, y)
+        assert (one is not None) == (ref is not None) == lands
+        if lands:
+            np.testing.assert_array_equal(one, ref)
+            _, (jac,), _ = monitor._one.lists(1.0, one)
+            assert 0.0 < jac < 1.0
