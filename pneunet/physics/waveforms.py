@@ -178,19 +178,23 @@ class Pulse(Waveform):
         out = self.low + (self.high - self.low) * frac
         return out if out.ndim else float(out)
 
-    def _corners(self, t_stop):
+    def _corners(self, t_start, t_stop):
+        """Corner times of the periods that reach into [t_start, t_stop] (s): from the
+        period before t_start's, not from 0 (a wall-clock time of 1.7e9 s is 1.7e8
+        periods of 10 s)."""
         offsets = np.array([0.0, self.rise, self.rise + self.width,
                             self.rise + self.width + self.fall])
         offsets = offsets[np.isfinite(offsets)]
         if self.period > 0:
+            first = max(math.floor((t_start - self.delay) / self.period) - 1, 0)
             n = int(np.ceil(max(t_stop - self.delay, 0.0) / self.period)) + 1
-            starts = self.delay + self.period * np.arange(n)
+            starts = self.delay + self.period * np.arange(first, max(n, first))
         else:
             starts = np.array([self.delay])
         return starts[:, None] + offsets[None, :]
 
     def breakpoints(self, t_start, t_stop):
-        return _inside(np.unique(self._corners(t_stop).ravel()), t_start, t_stop)
+        return _inside(np.unique(self._corners(t_start, t_stop).ravel()), t_start, t_stop)
 
     def corner_count(self, t_start, t_stop):
         if not self.period > 0:
@@ -198,7 +202,7 @@ class Pulse(Waveform):
         return 4.0 * (np.ceil(max(t_stop - max(self.delay, t_start), 0.0) / self.period) + 2)
 
     def jumps(self, t_start, t_stop):
-        corners = self._corners(t_stop)
+        corners = self._corners(t_start, t_stop)
         keep = []
         if self.rise == 0:
             keep.append(corners[:, 0])

@@ -229,8 +229,8 @@ def _check_values(df, columns, where, names) -> None:
     if np.any(step <= 0):
         i = int(np.flatnonzero(step <= 0)[0])
         what = "repeats" if step[i] == 0 else "goes back"
-        raise DataError(f"column time_s {what} at {place(i + 1)} (t = {t[i + 1]:g} s after "
-                        f"{t[i]:g} s)", where=where,
+        raise DataError(f"column time_s {what} at {place(i + 1)} (t = {float(t[i + 1])!r} s after "
+                        f"{float(t[i])!r} s)", where=where,
                         hint="sort the rows by time and drop duplicated time stamps")
 
 
