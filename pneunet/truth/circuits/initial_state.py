@@ -79,6 +79,7 @@ class StartState:
     driven: bool = False
     reason: str = ""
     signals: dict = field(default_factory=dict)
+    clock: str = ""  # how the netlist time of the first sample was found, when not the file's
 
     @property
     def first_time(self) -> float:
@@ -119,13 +120,14 @@ class StartState:
                     f"driven by its sources for {self.settle:.4g} s to the first sample")
         else:
             text = "rest state of the netlist at the first sample"
-        return f"{text}; circuit {kind}{clock}" + (f" ({self.reason})" if self.reason else "")
+        return f"{text}; circuit {kind}{clock}" + (f" ({self.reason})" if self.reason else "") \
+            + (f"; {self.clock}" if self.clock else "")
 
     def to_json(self) -> dict:
         return {"mode": self.mode, "pressures": dict(self.pressures),
                 "branch_guesses": dict(self.guesses), "fitted": list(self.fitted),
                 "time_offset_s": self.time_offset, "settle_s": self.settle,
-                "driven": self.driven, "reason": self.reason,
+                "driven": self.driven, "reason": self.reason, "clock": self.clock or None,
                 "element_signals": dict(self.signals)}
 
 
@@ -233,30 +235,38 @@ def _recorded_states(circuit, data) -> dict:
     return out
 
 
-def sources_vary(circuit, t0: float, t1: float, points: int = 400) -> bool:
+def sources_vary(circuit, t0: float, t1: float) -> bool:
     """Whether a source of ``circuit`` changes its value within [t0, t1] (s)."""
-    from ...physics.waveforms import Constant, Waveform
+    from .clock import varying_waveforms
 
-    grid = np.linspace(t0, t1, points)
-    for spec in circuit.elements.values():
-        for v in spec.params.values():
-            if not isinstance(v, Waveform) or isinstance(v, Constant):
-                continue
-            ts = np.unique(np.concatenate([grid, np.asarray(v.breakpoints(t0, t1), float)]))
-            ts = ts[(ts >= t0) & (ts <= t1)]
-            values = np.array([float(v.value(x)) for x in ts])
-            if np.ptp(values) > 0:
-                return True
-    return False
+    return bool(varying_waveforms(circuit, t0, t1))
 
 
 def choose_start(model, values: dict, data, mode: str = "auto",
                  time_offset: float | None = None, where: str = "trace") -> StartState:
     """The :class:`StartState` of ``model`` (a :class:`~pneunet.truth.circuits.model.TraceModel`)
     for the recording ``data`` (from :func:`~pneunet.truth.circuits.data.read_trace`) at the
-    parameter guesses ``values``; see the module docstring for ``mode``."""
+    parameter guesses ``values``; see the module docstring for ``mode``.  Without
+    ``time_offset``, a circuit driven by periodic sources whose switching the file's
+    clock misplaces starts at the phase the record shows (:mod:`.clock`)."""
     if mode not in START_MODES:
         raise ParameterError(f"start {mode!r} is not one of {', '.join(START_MODES)}")
+    clock = ""
+    if time_offset is None and mode != "settled":
+        origin = float(data.attrs.get("time_origin", 0.0))
+        times = data["time_s"].to_numpy()
+        circuit = model.base_circuit(values)
+        if sources_vary(circuit, origin, origin + float(times[-1])):
+            from .clock import source_clock
+
+            time_offset, clock = source_clock(circuit, data, origin)
+    state = _start_at(model, values, data, mode, time_offset, where)
+    return replace(state, clock=clock) if clock else state
+
+
+def _start_at(model, values: dict, data, mode: str, time_offset: float | None,
+              where: str) -> StartState:
+    """:func:`choose_start` once the netlist time of the first sample is settled."""
     times = data["time_s"].to_numpy()
     origin = float(data.attrs.get("time_origin", 0.0))
     circuit = model.base_circuit(values)

@@ -1,0 +1,67 @@
+"""A driven recording on the logger's own clock: the netlist time of its first sample is
+found from the record (pneunet.truth.circuits.clock), and one on the sources' clock keeps
+the file's time stamps."""
+import numpy as np
+import pytest
+
+from pneunet.netlist.builder import NetlistBuilder
+from pneunet.truth.circuits import fit_trace, read_trace
+from pneunet.truth.circuits.clock import common_period
+from pneunet.truth.circuits.initial_state import choose_start
+from pneunet.truth.circuits.model import TraceModel
+from pneunet.physics.waveforms import Pulse, Sine, Step
+from tests.traces.standalone_driven import amplifier_record
+from tests.traces.test_start_state import AMPLIFIER
+
+PARAMS = {"Rtube.R": (0.2, 0.02, 2.0), "Amck.V": (25.0, 5.0, 200.0)}
+TRUTH = {"Rtube.R": 0.24, "Amck.V": 30.0}
+
+
+def test_common_period_of_the_sources():
+    assert common_period([Pulse(96, 496, 5, 0.01, 0.01, 4.99, 10)]) == 10
+    assert common_period([Pulse(96, 496, 0, 0, 0, 1, 4), Pulse(96, 496, 0, 0, 0, 2, 6)]) \
+        == pytest.approx(12)
+    assert common_period([Sine(200, 50, 0.25), Pulse(96, 496, 0, 0, 0, 1, 2)]) == 4
+    assert common_period([Pulse(96, 496, 0, 0, 0, 1, 4), Step(96, 496, 1.0)]) is None
+    assert common_period([Sine(200, 50, 0.25, damping=0.1)]) is None
+
+
+@pytest.mark.parametrize("clock, seconds", [(0.0, 30), (1.7e9, 20)])  # logger's zero; wall clock
+def test_a_record_on_the_loggers_own_clock_is_placed_on_the_sources(clock, seconds):
+    """The amplifier recorded from 13.4 s on the sources' clock, the time column
+    written from the logger's zero (or a Unix time): before, the sources switched 3.4 s
+    off and the fit ended 464× the noise floor, unexplained; now the start is at 3.4 s
+    into a period, the line's values are covered and the fit is at the noise.  The
+    phase found at the guesses (30 s: 3.392 s) is found again at the fitted values."""
+    rec = amplifier_record(13.4, seconds, dt=0.01, noise=0.3, seed=5, R_line=0.24, V=30.0)
+    rec = rec.iloc[:100 * seconds].copy()  # the generator's last two samples are 6e-13 s apart
+    rec["time_s"] = clock + 0.01 * np.arange(len(rec))
+    fit = fit_trace(NetlistBuilder(AMPLIFIER), rec, PARAMS, node="muscle")
+    state = fit.start_state
+    assert "estimated from the record" in state.clock
+    assert (state.first_time - 13.4) % 10.0 == pytest.approx(0.0, abs=2e-3) or \
+        (state.first_time - 13.4) % 10.0 == pytest.approx(10.0, abs=2e-3)
+    for k, v in TRUTH.items():
+        lo, hi = fit.ci[k]
+        assert lo <= v <= hi, (k, fit.ci[k])
+    assert fit.error() < 0.35  # the noise is 0.3 kPa
+    assert fit.as_dict()["start_state"]["clock"] == state.clock
+
+
+def test_a_record_on_the_sources_clock_keeps_its_time_stamps():
+    rec = amplifier_record(13.4, 20.0, dt=0.01, noise=0.3, seed=5, R_line=0.24, V=30.0)
+    model = TraceModel(NetlistBuilder(AMPLIFIER))
+    state = choose_start(model, {k: v[0] for k, v in PARAMS.items()}, read_trace(rec))
+    assert state.clock == ""
+    assert state.first_time == pytest.approx(13.4)
+    assert state.to_json()["clock"] is None
+
+
+def test_a_pulse_at_wall_clock_time_lists_only_its_nearby_corners():
+    """A PULSE asked for its corners at t = 1.7e9 s built every corner since 0 (6.8e8
+    of them, 120 s for one recording's start)."""
+    p = Pulse(96, 496, 5, 0.01, 0.01, 4.99, 10)
+    # 1.7e9 s is a whole number of periods after 10 s
+    np.testing.assert_allclose(p.breakpoints(1.7e9, 1.7e9 + 30) - 1.7e9,
+                               p.breakpoints(10.0, 40.0) - 10.0, atol=1e-6)
+    assert len(p._corners(1.7e9, 1.7e9 + 30)) <= 6  # periods around the window only
