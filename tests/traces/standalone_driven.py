@@ -69,6 +69,27 @@ def pulse(t, v1, v2, td, tr, tf, pw, per):
     return v1
 
 
+def integrate_between(rhs, y0, breaks, times, t_start):
+    """(t, y) of ``rhs`` integrated by Radau from ``y0`` at ``breaks[0]``, restarted at
+    every corner of ``breaks`` (sorted), at the sample ``times`` from ``t_start`` on."""
+    out_t, out_y = [], []
+    y = y0
+    for a, b in zip(breaks[:-1], breaks[1:]):
+        inside = times[(times >= a) & (times < b)]
+        sol = solve_ivp(rhs, (a, b), y, method="Radau", t_eval=np.append(inside, b),
+                        rtol=1e-8, atol=1e-8)
+        assert sol.success, sol.message
+        out_t.append(sol.t[:-1])
+        out_y.append(sol.y[:, :-1])
+        y = sol.y[:, -1]
+    t_all = np.concatenate(out_t)
+    y_all = np.concatenate(out_y, axis=1)
+    if times[-1] >= breaks[-1] - 1e-12:
+        t_all, y_all = np.append(t_all, breaks[-1]), np.column_stack([y_all, y])
+    keep = t_all >= t_start - 1e-12
+    return t_all[keep], y_all[:, keep]
+
+
 def amplifier_record(t_start=0.0, duration=30.0, dt=0.01, noise=0.3, seed=0,
                      signals=("act", "muscle"), **kw):
     """A noisy recording (DataFrame: time_s on the sources' clock from ``t_start``,
@@ -134,22 +155,7 @@ def amplifier_record(t_start=0.0, duration=30.0, dt=0.01, noise=0.3, seed=0,
                                     for b in (k * T + T / 2, k * T + T / 2 + 0.01,
                                               k * T + T, k * T + T + 0.01) if 0 < b < t_end})
     times = np.arange(t_start, t_end + 1e-9, dt)
-    out_t, out_y = [], []
-    y = y0
-    for a, b in zip(breaks[:-1], breaks[1:]):  # integrated between the pulses' corners
-        inside = times[(times >= a) & (times < b)]
-        sol = solve_ivp(rhs, (a, b), y, method="Radau", t_eval=np.append(inside, b),
-                        rtol=1e-8, atol=1e-8)
-        assert sol.success, sol.message
-        out_t.append(sol.t[:-1])
-        out_y.append(sol.y[:, :-1])
-        y = sol.y[:, -1]
-    t_all = np.concatenate(out_t)
-    y_all = np.concatenate(out_y, axis=1)
-    if times[-1] >= breaks[-1] - 1e-12:
-        t_all, y_all = np.append(t_all, breaks[-1]), np.column_stack([y_all, y])
-    keep = t_all >= t_start - 1e-12
-    t_all, y_all = t_all[keep], y_all[:, keep]
+    t_all, y_all = integrate_between(rhs, y0, breaks, times, t_start)
     values = {"act": y_all[0], "muscle": np.array([muscle_pressure(c) for c in y_all.T])}
     rng = np.random.default_rng(seed)
     data = {"time_s": t_all}

@@ -12,10 +12,9 @@ from __future__ import annotations
 
 import numpy as np
 import pandas as pd
-from scipy.integrate import solve_ivp
 
 from .standalone import resistor
-from .standalone_driven import GAMMA, T_WALL, capacitance, pulse, valve
+from .standalone_driven import GAMMA, T_WALL, capacitance, integrate_between, pulse, valve
 
 DEFAULTS = {"psup": 496.0, "plo": 96.0, "phi": 496.0, "ambient": 96.0, "Rpull": 20.0,
             "V1": 2.0, "V2": 2.0,
@@ -89,22 +88,7 @@ def inverter_record(t_start=0.0, duration=20.0, dt=0.02, noise=0.3, seed=0,
                for c in (0.0, tr, tr + pw, tr + pw + tf)}
     breaks = sorted({0.0, t_end} | {b for b in corners if 0 < b < t_end})
     times = t_start + dt * np.arange(int(round(duration / dt)) + 1)
-    out_t, out_y = [], []
-    y = y0
-    for a, b in zip(breaks[:-1], breaks[1:]):  # integrated between the pulse's corners
-        inside = times[(times >= a) & (times < b)]
-        sol = solve_ivp(rhs, (a, b), y, method="Radau", t_eval=np.append(inside, b),
-                        rtol=1e-8, atol=1e-8)
-        assert sol.success, sol.message
-        out_t.append(sol.t[:-1])
-        out_y.append(sol.y[:, :-1])
-        y = sol.y[:, -1]
-    t_all = np.concatenate(out_t)
-    y_all = np.concatenate(out_y, axis=1)
-    if times[-1] >= breaks[-1] - 1e-12:
-        t_all, y_all = np.append(t_all, breaks[-1]), np.column_stack([y_all, y])
-    keep = t_all >= t_start - 1e-12
-    t_all, y_all = t_all[keep], y_all[:, keep]
+    t_all, y_all = integrate_between(rhs, y0, breaks, times, t_start)
     values = {"out1": np.array([out1_pressure(c) for c in y_all.T]), "out2": y_all[1],
               "in": np.array([pulse(t, *wave) for t in t_all])}
     rng = np.random.default_rng(seed)
