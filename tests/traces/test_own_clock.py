@@ -39,8 +39,8 @@ def test_a_record_on_the_loggers_own_clock_is_placed_on_the_sources(clock, secon
     fit = fit_trace(NetlistBuilder(AMPLIFIER), rec, PARAMS, node="muscle")
     state = fit.start_state
     assert "estimated from the record" in state.clock
-    assert (state.first_time - 13.4) % 10.0 == pytest.approx(0.0, abs=2e-3) or \
-        (state.first_time - 13.4) % 10.0 == pytest.approx(10.0, abs=2e-3)
+    assert (state.first_time - 13.4) % 10.0 == pytest.approx(0.0, abs=5e-3) or \
+        (state.first_time - 13.4) % 10.0 == pytest.approx(10.0, abs=5e-3)  # half a sample
     for k, v in TRUTH.items():
         lo, hi = fit.ci[k]
         assert lo <= v <= hi, (k, fit.ci[k])

@@ -28,8 +28,10 @@ import numpy as np
 CLOCK_SLACK = 2.0
 #: most periods of the longest source tried for a common period of several
 MAX_PERIODS = 100
-#: simulation output points per sample spacing (the phase is found to a tenth of it)
+#: simulation output points per sample spacing (the phase is found to a fifth of it)
 FINER = 5
+#: most phases compared at once, and most samples of the record compared at each
+SCAN_POINTS = 1000
 
 
 def common_period(waveforms) -> float | None:
@@ -101,6 +103,7 @@ def source_clock(circuit, data, origin: float) -> tuple[float, str]:
             continue
         y = data[c].to_numpy(float)[window]
         ok = np.isfinite(y)
+        ok[np.arange(len(ok)) % max(1, len(ok) // SCAN_POINTS) != 0] = False
         scale = record_sigma(data[c].to_numpy(float))
         scale = scale if math.isfinite(scale) and scale > 0 else max(float(np.ptp(y[ok])), 1.0)
         signals.append((np.asarray(sol[s], float), y[ok], t_w[ok], scale))
@@ -116,12 +119,18 @@ def source_clock(circuit, data, origin: float) -> tuple[float, str]:
 
     if not signals:
         return origin, ""
-    phases = np.arange(0.0, period, dt)
-    coarse = misfit(settled + phases)
-    near = phases[int(np.argmin(coarse))] + np.arange(-FINER, FINER + 1) * dt / FINER
-    fine = misfit(settled + near)
-    phase = float(near[int(np.argmin(fine))]) % period
-    least = float(np.min(fine))
+    # every phase on a grid of at most SCAN_POINTS, then zoomed in tenfold around the
+    # best until the grid is a FINER-th of a sample
+    step = max(dt, period / SCAN_POINTS)
+    phases = np.arange(0.0, period, step)
+    while True:
+        cost = misfit(settled + phases)
+        phase, least = float(phases[int(np.argmin(cost))]), float(np.min(cost))
+        if step <= dt / FINER * (1 + 1e-9):
+            break
+        width, step = step, max(step / 10, dt / FINER)
+        phases = phase + step * np.arange(-math.ceil(width / step), math.ceil(width / step) + 1)
+    phase %= period
     # the file's clock: kept at the phase found (a record from switch-on is no settled
     # cycle), else compared on the run from rest where it covers it, else at its phase
     apart = abs(phase - (origin - delay) % period)
@@ -134,7 +143,7 @@ def source_clock(circuit, data, origin: float) -> tuple[float, str]:
     offset = delay + phase + period * max(1, math.ceil(span / period))
     ratio = math.sqrt(float(misfit([at_origin])[0]) / least)
     note = (f"the file's clock puts the sources' switching {ratio:.3g}× further from the "
-            f"record than the best phase: netlist time {offset:.6g} s at the first sample "
-            f"(or a whole number of the sources' {period:g} s period earlier), estimated "
-            f"from the record (give a time offset to set it)")
+            f"record than the best phase: the first sample's netlist time is estimated from "
+            f"the record (the sources repeat every {period:g} s; give a time offset to set "
+            f"it)")
     return offset, note
