@@ -88,18 +88,18 @@ def test_a_valve_flow_logged_in_whole_steps_has_at_least_its_rounding_as_floor()
 
 def test_record_sigma_of_a_swinging_record_is_its_noise():
     """A record's own noise from its fourth differences, normalised by √C(8, 4) = √70:
-    white noise of σ 0.5 on a 100-unit swing of period 6 s at 20 Hz; within groups only
+    white noise of σ 2 on a 100-unit swing of period 6 s at 20 Hz; within groups only
     (a 1000-unit step between two groups adds nothing); NaN with too few differences."""
     from pneunet.truth.core.noise import record_sigma
 
     rng = np.random.default_rng(3)
     t = np.arange(0, 60, 0.05)
-    y = 100 * np.sin(2 * np.pi * t / 6) + 0.5 * rng.standard_normal(len(t))
-    assert record_sigma(y) == pytest.approx(0.5, rel=0.08)
+    y = 100 * np.sin(2 * np.pi * t / 6) + 2.0 * rng.standard_normal(len(t))
+    assert record_sigma(y) == pytest.approx(2.0, rel=0.08)
     groups = np.arange(len(t)) // 8  # sweeps of 8 samples, each 1000 units above the last
     stepped = y + 1000.0 * groups
-    assert record_sigma(stepped, groups) == pytest.approx(0.5, rel=0.12)
-    assert record_sigma(stepped) > 1.5  # differences across the sweeps' steps: 2.2
+    assert record_sigma(stepped, groups) == pytest.approx(2.0, rel=0.12)
+    assert record_sigma(stepped) > 3.0  # differences across the sweeps' steps
     assert np.isnan(record_sigma(y[:4]))  # no fourth difference
     assert np.isnan(record_sigma(y[:13]))  # 9 differences < 10
     assert np.isfinite(record_sigma(y[:14]))  # 10 differences
