@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy import optimize
 
-from pneunet.truth.core.lsq import least_squares_log
+from pneunet.truth.core.lsq import FIRST_RADIUS, least_squares_log
 
 T = np.linspace(0.0, 4.0, 60)
 NOISE = 0.01 * np.random.default_rng(7).standard_normal(T.size)
@@ -63,6 +63,23 @@ def test_a_step_past_a_bound_is_released_when_the_optimum_is_inside():
     lb, ub = np.log([0.1, 0.01]), np.log([50.0, 1.0])
     x0 = np.log([1.0, 0.05])
     res = least_squares_log(fun, x0, lb, ub, max_nfev=80, diff_step=1e-4)
+    np.testing.assert_allclose(np.exp(res.x), np.exp(_reference(lb, ub, x0)), rtol=1e-3)
+
+
+def test_first_step_stays_within_the_first_radius():
+    """LM's first trial point lies within FIRST_RADIUS of the start in ln x (MINPACK lets
+    a step exceed its radius by 10 %): its own first radius, 100·‖x‖, let the first
+    step of a circuit fit go to a corner of the box, where every parameter was held at
+    its bound.  From (1, 0.05) the optimum (2, 0.7) is 2.7 away; LM gets there by
+    widening its radius."""
+    fun = Decay()
+    lb, ub = np.log([0.1, 0.001]), np.log([50.0, 10.0])
+    x0 = np.log([1.0, 0.05])
+    res = least_squares_log(fun, x0, lb, ub, max_nfev=80, diff_step=1e-4)
+    away = [float(np.linalg.norm(c - x0)) for c in fun.calls]
+    first = next(d for d in away if d > 10 * 1e-4)  # past the Jacobian's columns
+    assert first <= 1.1 * FIRST_RADIUS
+    assert max(away) > 2.0  # the radius widened
     np.testing.assert_allclose(np.exp(res.x), np.exp(_reference(lb, ub, x0)), rtol=1e-3)
 
 

@@ -40,6 +40,10 @@ RESTARTS = 2
 #: MINPACK's relative step tolerance, applied to ln x shifted by a constant (see
 #: :func:`least_squares_log`): small, so that the shift keeps the sums exact
 _MINPACK_XTOL = 1e-8
+#: LM's first trust radius in ln x (Euclidean over the free parameters): the first step
+#: changes the parameters by at most a factor e^0.5 ≈ 1.65 together; LM widens the
+#: radius itself after steps that do what its model predicted
+FIRST_RADIUS = 0.5
 
 
 def least_squares_log(fun, x0, lb, ub, *, max_nfev: int = 40, diff_step: float = 1e-3,
@@ -52,12 +56,14 @@ def least_squares_log(fun, x0, lb, ub, *, max_nfev: int = 40, diff_step: float =
     ``max_nfev`` caps the simulations, Jacobian columns included; no point is simulated
     twice.  The Jacobian returned has a column for every parameter.
 
-    LM stops when its trust region falls below ``xtol`` in ln x (5e-4: 0.05 % of every
-    parameter, far inside any interval a recording gives) or a step lowers the cost by
-    less than ``ftol`` relatively.  MINPACK's own test, radius < xtol·‖x‖, depends on
-    the units a parameter is written in (ln x = 0 for a value of exactly 1 in its unit,
-    and the first radius is 100·‖x‖): LM runs on u = ln x + K, a shift that changes no
-    step, with K·√n·1e-8 = ``xtol``."""
+    LM's trust region is a ball in ln x (every parameter relative to its value): it
+    starts at radius :data:`FIRST_RADIUS`, and LM stops when it falls below ``xtol``
+    (5e-4: 0.05 % of every parameter, far inside any interval a recording gives) or a
+    step lowers the cost by less than ``ftol`` relatively.  MINPACK's own rules,
+    radius < xtol·‖x‖ and a first radius of 100·‖x‖, depend on the units a parameter
+    is written in (ln x = 0 for a value of exactly 1 in its unit) and let the first step
+    go to a corner of the box: LM runs on u = ln x + K, a shift that changes no step,
+    with K·√n·1e-8 = ``xtol``, and MINPACK's ``factor`` sets the first radius."""
     from scipy import optimize
 
     lb, ub = np.asarray(lb, float), np.asarray(ub, float)
@@ -99,11 +105,13 @@ def least_squares_log(fun, x0, lb, ub, *, max_nfev: int = 40, diff_step: float =
 
         left = max_nfev - count["n"]
         shift = xtol / (_MINPACK_XTOL * math.sqrt(idx.size))
-        res = optimize.least_squares(lambda u: f(at(u - shift)), x[idx] + shift,
-                                     jac=lambda u, idx=idx: jacobian(at(u - shift), idx),
-                                     method="lm", max_nfev=max(2, left // (idx.size + 1)),
-                                     xtol=_MINPACK_XTOL, ftol=ftol)
-        z = res.x - shift
+        u0 = x[idx] + shift
+        u, _, _, message, status = optimize.leastsq(
+            lambda u: f(at(u - shift)), u0,
+            Dfun=lambda u, idx=idx: jacobian(at(u - shift), idx), full_output=True,
+            maxfev=max(2, left // (idx.size + 1)), xtol=_MINPACK_XTOL, ftol=ftol,
+            factor=FIRST_RADIUS / float(np.linalg.norm(u0)), diag=np.ones(idx.size))
+        z = u - shift
         x = at(z)
         # LM walked past a bound, where the clipped residual is flat: hold it there;
         # release a held parameter whose gradient points back into the box
@@ -118,4 +126,4 @@ def least_squares_log(fun, x0, lb, ub, *, max_nfev: int = 40, diff_step: float =
         if not free.any():
             break
     return LsqResult(x, np.asarray(f(x)), jacobian(x, range(len(x))), count["n"],
-                     bool(res.success), str(res.message))
+                     1 <= status <= 4, " ".join(str(message).split()))
