@@ -143,13 +143,13 @@ def test_a_candidate_whose_fit_fails_is_reported_not_a_crash(monkeypatch):
     """A candidate fit that cannot simulate the whole record (SolverError) is a failed
     candidate with the solver's message; the diagnosis still gives its verdict."""
     from pneunet.common.errors import SolverError
-    from pneunet.truth.circuits import diagnosis as module
+    from pneunet.truth.circuits import candidate_fits as module
     from pneunet.truth.circuits.effects import DeadVolume
 
     def failing(*args, **kwargs):
         raise SolverError("IDA stopped at t = 10 s", time=10.0)
 
-    monkeypatch.setattr(module._Fitting, "_fit", failing)  # every start of every candidate
+    monkeypatch.setattr(module.CandidateFits, "_fit", failing)  # every start of every candidate
     d = diagnose_trace(oscillator, oscillator_record(12.0, noise=0.4, seed=1, V_out=1.5),
                        PARAMS, node="tank", effects=[DeadVolume("out")])
     j = d.to_json()

@@ -22,18 +22,25 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ...common.errors import SolverError
 from ...common.reprs import Summarized, listed, number
 from ..core.locate import best_lag, hot_phases, phase_profile
 from ..core.noise import ROUNDING_SIGMA, difference_sigma, resolution, segments
 from ..core.verdict import TOLERANCE, Step, at_floor, decide
 from ..core.waterfall import Waterfall
-from .data import (compared_samples, read_trace, signal_of_column, signal_unit,
-                   split_by_cycles)
+from .candidate_fits import (CandidateFits, at_bound, base_refit, fit_data, fit_pairs,
+                             fit_screened, second_effects, single_refit_from_pair,
+                             unfitted_row)
+from .data import read_trace, signal_of_column, signal_unit, split_by_cycles
 from .effects import candidates_for
-from .fit import TraceFit, fit_trace, near_bound
+from .fit import TraceFit, fit_trace
 from .model import FIT_OPTIONS, TraceModel
-from .screen import SCREEN_KEEP, screen_candidates, step_starts
+from .screen import screen_candidates
+
+#: the base fit's cap on simulations, × ``max_nfev``: a fit that stops on its budget
+#: has stalled (a storage node's 400 kPa edges within one sample make the cost steep:
+#: the inverter chain's base fit needs about 95 simulations from guesses 25 % off); a
+#: fit that converges stops before
+BASE_BUDGET = 3
 
 
 @dataclass(repr=False)
@@ -202,7 +209,8 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
     as in :func:`~pneunet.truth.circuits.fit.fit_trace` (one start state, chosen for the base
     fit, serves every fit); ``effects``: candidate effects (kinds,
     bound effects or their names; default every registered one at every site);
-    ``screen``: how many of the best screened candidates may be fitted fully (the best
+    ``max_nfev``: cap on a fit's simulations (:data:`BASE_BUDGET` × for the base
+    fit); ``screen``: how many of the best screened candidates may be fitted fully (the best
     two, a third within :data:`SCREEN_KEEP` of the best's merit; 4 × ``max_nfev``:
     they have more parameters and start further away), each from its screen's best
     point, and when none reaches the floor each again from a second start;
@@ -225,8 +233,8 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
         say("base fit")
         t0 = time.perf_counter()
         base = fit_trace(build, df, params, fixed=fixed, node=node, window=train,
-                         max_nfev=max_nfev, pool=pool, options=options, where=where,
-                         start_state=start_state, time_offset=time_offset)
+                         max_nfev=BASE_BUDGET * max_nfev, pool=pool, options=options,
+                         where=where, start_state=start_state, time_offset=time_offset)
         state = base.start_state
         say(f"start: {state.describe()}")
         params = {**params, **{k: v for k, v in state.fitted.items() if k not in params}}
@@ -243,59 +251,29 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
         circuit = TraceModel(build, fixed, options=options, state=state).circuit(base.values)
         cand = candidates_for(circuit, effects)
         verdict, accepted = decide(steps, floor, tolerance)
-        fitting = _Fitting(build, df, params, fixed, node, train, test, base, pool, options,
-                           where, state, floor, tolerance)
+        fitting = CandidateFits(build, df, params, fixed, node, train, test, base, pool,
+                                options, where, state, floor, tolerance)
         if verdict != "adequate" and cand:
             say(f"screening {len(cand)} candidate effects")
             t0 = time.perf_counter()
             names = list(params)
             x_hat = np.log([base.values[k] for k in names])
-            data_fit = _fit_data(df, train, base)
+            data_fit = fit_data(df, train, base)
             n_res = sum(int(v.sum()) for v in data_fit[3].values())
             typical = base.wall_time_s / max(base.nfev, 1)
             rows = screen_candidates(cand, names, x_hat, base.extras["jacobian"], params,
                                      ((build, fixed), {"options": options,
                                                        "typical_s": typical, "state": state}),
                                      data_fit, pool)
-            close = rows[:min(2, screen)] + [r for r in rows[2:screen]
-                                             if r["rss"] <= SCREEN_KEEP * rows[0]["rss"]]
-            step_starts(close, pool)
             timing["screen_s"] = time.perf_counter() - t0
             timing["screen_simulations"] = sum(r["simulations"] for r in rows)
             t0 = time.perf_counter()
-            for row in close:
-                eff = row["effect"]
-                if not math.isfinite(row["rss"]):
-                    fitting.failed[eff.name] = ("not fitted: the circuit could not be simulated "
-                                                "at any point of its parameter range")
-                    continue
-                say(f"fitting {eff.name}")
-                fit = fitting.start(eff, row["x"], 4 * max_nfev)
-                if fit is not None:
-                    fits[eff.name] = fit
-            # none at the floor: a second start for each fitted one, best first
-            by_error = sorted((n for n in fits if n != "none"), key=lambda n: fits[n].error(test))
-            if not any(at_floor(fits[n].error(test), floor, tolerance) for n in by_error):
-                for row in close:
-                    eff = row["effect"]
-                    if eff.name not in fits and eff.name not in fitting.failed:
-                        continue
-                    say(f"fitting {eff.name} from a second start")
-                    second = {k: _second_start(v, row["x"].get(k))
-                              for k, v in eff.params.items()}
-                    fit = fitting.start(eff, {**fitting.base_start(guesses=True), **second},
-                                        4 * max_nfev)
-                    if fit is not None and (eff.name not in fits or fit.error(test)
-                                            < fits[eff.name].error(test)):
-                        fits[eff.name] = fit
-                        fitting.failed.pop(eff.name, None)
-                    if fit is not None and at_floor(fit.error(test), floor, tolerance):
-                        break
+            fit_screened(rows, fits, fitting, screen, 4 * max_nfev, say)
             timing["candidate_fits_s"] = time.perf_counter() - t0
             fitted = sorted((n for n in fits if n != "none"), key=lambda n: fits[n].error(test))
             ranking += [_row(n, fits[n], test, floor, fitting.starts.get(n))
                         for n in fitted]
-            ranking += [_unfitted_row(r, fitting.failed, n_res) for r in rows
+            ranking += [unfitted_row(r, fitting.failed, n_res) for r in rows
                         if r["effect"].name not in fits]
             ranking.sort(key=lambda r: (r["held_out_rms"] is None, r["held_out_rms"] or 0))
             if fitted:
@@ -310,15 +288,19 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
                 verdict, accepted = decide(steps, floor, tolerance)
                 if verdict == "unexplained" and steps[1].held_out < steps[0].held_out:
                     t0 = time.perf_counter()
-                    seconds = _second_effects(fits, best, fitted, cand, params, fitting,
+                    seconds = second_effects(fits, best, fitted, cand, params, fitting,
                                               (build, fixed, options, state), df, train, pool,
                                               say)
-                    _fit_pairs(fits, best, seconds, steps, fitting, 4 * max_nfev, notes, say)
-                    if _single_refit_from_pair(fits, best, steps, fitting, 4 * max_nfev, say):
+                    fit_pairs(fits, best, seconds, steps, fitting, 4 * max_nfev, notes, say)
+                    if single_refit_from_pair(fits, best, steps, fitting, 4 * max_nfev, say):
                         ranking = [r if r["effect"] != best else
                                    _row(best, fits[best], test, floor, fitting.starts.get(best))
                                    for r in ranking]
                     timing["second_effect_s"] = time.perf_counter() - t0
+            if base_refit(fits, steps, fitting, BASE_BUDGET * max_nfev, notes, say):
+                base = fits["none"]
+                ranking = [r if r["effect"] != "none" else _row("none", base, test, floor)
+                           for r in ranking]
         # the steps' floor ratios may have changed with the floor: decide once more
         verdict, accepted = decide(steps, floor, tolerance)
         final = fits[" + ".join(accepted)] if accepted else base
@@ -330,7 +312,7 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
                          "amount (no single place)"]
         for name in accepted:
             f = fits[" + ".join(accepted)]
-            at = _at_bound(f)
+            at = at_bound(f)
             if at:
                 notes.append(f"{name}: {at} at its bound")
     finally:
@@ -347,171 +329,6 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
                           signal_table(base, final, test, noise, tolerance))
 
 
-class _Fitting:
-    """The full fits of candidate effects within one diagnosis (each from given starting
-    values: the screen's best point, or a second start, the effect's own guess or its
-    range's log-middle); pairs started from each single fit's own values."""
-
-    def __init__(self, build, df, params, fixed, node, train, test, base, pool, options,
-                 where, state, floor, tolerance):
-        self.build, self.df, self.params, self.fixed, self.node = build, df, params, fixed, node
-        self.train, self.test, self.base, self.pool, self.options = train, test, base, pool, options
-        self.where, self.state, self.floor, self.tolerance = where, state, floor, tolerance
-        self.failed = {}  # effect name -> why it has no fit
-        self.starts = {}  # effect name -> [{start values, held-out rms, simulations}]
-
-    def _fit(self, effs, x_start, max_nfev):
-        p = {k: (float(np.clip(self.base.values[k], lo, hi)), lo, hi)
-             for k, (_, lo, hi) in self.params.items()}
-        for e in effs:
-            p.update(e.params)
-        x = self.base_start()
-        x.update(x_start)
-        for k in p:
-            x.setdefault(k, p[k][0])
-        return fit_trace(self.build, self.df, p, fixed=self.fixed, node=self.node,
-                         window=self.train, effects=effs, max_nfev=max_nfev, pool=self.pool,
-                         options=self.options, x_start=x, where=self.where,
-                         start_state=self.state)
-
-    def base_start(self, guesses: bool = False) -> dict:
-        """Starting values of the base parameters: the base fit's, except where it
-        stopped at a bound of its range (a base model bent to mimic missing physics),
-        or everywhere with ``guesses``: the user's guesses."""
-        out = {}
-        for k, (guess, lo, hi) in self.params.items():
-            v = self.base.values[k]
-            out[k] = guess if guesses or near_bound(v, lo, hi) else v
-        return out
-
-    def start(self, eff, x_start, max_nfev) -> TraceFit | None:
-        """The fit of ``eff`` from ``x_start`` (its parameters; the base ones from the
-        base fit's or the screen's); None (and why in ``failed``) when it fails.  Every
-        start is listed in ``starts``."""
-        try:
-            fit = self._fit((eff,), x_start, max_nfev)
-        except SolverError as err:
-            self.failed.setdefault(eff.name, f"fit failed: {err}")
-            return None
-        self.starts.setdefault(eff.name, []).append(
-            {"start": {k: float(x_start[k]) for k in eff.params if k in x_start},
-             "held_out_rms": fit.error(self.test), "simulations": fit.extras.get("simulations")})
-        return fit
-
-    def pair(self, effects, x_start, max_nfev, notes) -> TraceFit | None:
-        """Two effects at once from ``x_start`` (a single fit's own values and the
-        second's start, never values a failed fit left at a bound); None (and why in
-        ``notes``) when it fails."""
-        try:
-            return self._fit(effects, x_start, max_nfev)
-        except SolverError as err:
-            notes.append(f"{' + '.join(e.name for e in effects)}: fit failed: {err}")
-            return None
-
-
-def _second_effects(fits, best, fitted, cand, params, fitting, model_setup, df, train, pool,
-                    say):
-    """Second effects to fit with ``best`` (a single effect that improved on the base
-    model but did not reach the floor), each with its start values: the best of every
-    other candidate screened again on top of ``best``'s fit (an effect the wrong base
-    model hid: its screen ran around a base fit bent to mimic two effects), then the next
-    single fit that did not stop at a bound, started from ``best``'s values."""
-    first = fits[best]
-    build, fixed, options, state = model_setup
-    names = list(first.values)
-    p2 = {**params, **first.effects[0].params}
-    others = [e for e in cand if e.name != best]
-    out = []
-    if others:
-        say(f"screening {len(others)} candidate effects on top of {best}")
-        typical = first.wall_time_s / max(first.nfev, 1)
-        rows = screen_candidates(
-            others, names, np.log([first.values[k] for k in names]), first.extras["jacobian"],
-            p2, ((build, fixed), {"options": options, "typical_s": typical, "state": state}),
-            _fit_data(df, train, first), pool, on_top=first.effects)
-        step_starts(rows[:1], pool)
-        if math.isfinite(rows[0]["rss"]):
-            out.append((rows[0]["effect"], rows[0]["x"]))
-    usable = [n for n in fitted[1:] if not _at_bound(fits[n])]
-    if usable and all(e.name != usable[0] for e, _ in out):
-        e2 = fits[usable[0]].effects[0]
-        out.append((e2, {**first.values, **{k: fits[usable[0]].values[k] for k in e2.params}}))
-    return out
-
-
-def _fit_pairs(fits, best, seconds, steps, fitting, max_nfev, notes, say):
-    """Fit ``best`` with each second effect of ``seconds`` in turn until a pair reaches
-    the floor; the best pair so far is the waterfall's last step."""
-    test, floor, tolerance = fitting.test, fitting.floor, fitting.tolerance
-    for nxt, x_start in seconds:
-        say(f"fitting {best} + {nxt.name}")
-        pair = fitting.pair((fits[best].effects[0], nxt), x_start, max_nfev, notes)
-        name = f"{best} + {nxt.name}"
-        if pair is None or (name in fits and fits[name].error(test) <= pair.error(test)):
-            continue
-        fits[name] = pair
-        if pair.error(test) < steps[-1].held_out:
-            if len(steps) > 2:
-                steps.pop()
-            steps.append(Step(nxt.name, pair.error(test), effects=(best, nxt.name)))
-        if at_floor(pair.error(test), floor, tolerance):
-            break
-
-
-def _single_refit_from_pair(fits, best, steps, fitting, max_nfev, say) -> bool:
-    """Parsimony: when a pair reached the floor, ``best`` alone again from the pair's
-    values (a single fit that stopped in a wrong valley, a second effect making up for
-    it); True when that single fit is better than ``best``'s first (it replaces it)."""
-    test, floor, tolerance = fitting.test, fitting.floor, fitting.tolerance
-    if len(steps) < 3 or not at_floor(steps[-1].held_out, floor, tolerance):
-        return False
-    pair = fits[" + ".join(steps[-1].effects)]
-    drop = pair.effects[1].params
-    say(f"fitting {best} again from the pair's values")
-    again = fitting.start(pair.effects[0], {k: v for k, v in pair.values.items()
-                                            if k not in drop}, max_nfev)
-    if again is None or again.error(test) >= fits[best].error(test):
-        return False
-    fits[best] = again
-    steps[1] = Step(best, again.error(test), effects=(best,))
-    if at_floor(again.error(test), floor, tolerance):
-        steps.pop()  # the second effect is not needed
-    return True
-
-
-def _second_start(spec, first):
-    """A second starting value of an effect parameter ``spec`` = (guess, low, high):
-    its guess, or when the first start was near it, the log-middle of its range."""
-    guess, lo, hi = spec
-    mid = math.sqrt(lo * hi)
-    if first is None or abs(math.log(first / guess)) > 0.5:
-        return guess
-    return mid
-
-
-def _unfitted_row(row, failed, n_res) -> dict:
-    name = row["effect"].name
-    return {"effect": name, "held_out_rms": None, "fitted": False,
-            "status": "failed" if name in failed else "screened out",
-            "screen_rms": math.sqrt(row["rss"] / n_res) if math.isfinite(row["rss"]) else None,
-            "screen_values": {k: float(v) for k, v in row["x"].items()},
-            "note": failed.get(name, "not fitted: across its parameter range it fits the first "
-                                     "cycles worse than the ones fitted fully")}
-
-
-def _fit_data(df, window, base: TraceFit):
-    """(times, signals, measured, keep, scales) of the fit window, as the base fit."""
-    times = df["time_s"].to_numpy()
-    mask = (times >= window[0]) & (times <= window[1])
-    sigs = base.signals()
-    cols = {signal_of_column(c): c for c in df.columns if c != "time_s"}
-    meas = {s: df[cols[s]].to_numpy() for s in sigs}
-    after = times >= base.extras.get("compared_from_s", 0.0)  # as the base fit compared
-    keep = {s: (compared_samples(meas[s]) & after)[mask] for s in sigs}
-    return (times[mask], sigs, {s: meas[s][mask] for s in sigs}, keep, base.scales,
-            base.extras.get("alignment"))
-
-
 def _row(name, fit: TraceFit, test, floor, starts=None) -> dict:
     h = fit.error(test)
     row = {"effect": name, "held_out_rms": h, "ratio_to_floor": h / floor if floor else None,
@@ -523,13 +340,3 @@ def _row(name, fit: TraceFit, test, floor, starts=None) -> dict:
     if starts is not None:
         row["starts"] = starts
     return row
-
-
-def _at_bound(fit: TraceFit) -> str:
-    """'k = value' of the first of the fit's effect parameters that stopped at a bound of
-    its range, or ''."""
-    for e in fit.effects:
-        for k, (_, lo, hi) in e.params.items():
-            if near_bound(fit.values[k], lo, hi):
-                return f"{k} = {fit.values[k]:.4g}"
-    return ""

@@ -4,7 +4,8 @@ The unknown parameters (e.g. R_out, R_vent and V of the oscillator, and the para
 of circuit effects) are varied in log space within bounds until the simulated signals
 match the recorded ones at the recorded times, on a fit window (the first cycles).
 Every recorded column is compared; around the jumps of an algebraic node (p_out at a
-fold) a few samples are left out (:func:`~pneunet.truth.circuits.data.compared_samples`).
+fold) a few samples are left out (:func:`compared_masks`); a storage node's samples are
+all compared, its fast edges included (they tell a resistance from a volume).
 Intervals come from :func:`pneunet.truth.core.intervals.intervals` (white residuals, or a
 sandwich through an AR model of autocorrelated ones, and why).  The solution over the
 whole record gives the held-out error.
@@ -229,7 +230,7 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
     x0 = np.log([params[k][0] for k in names])
     lb = np.log([params[k][1] for k in names])
     ub = np.log([params[k][2] for k in names])
-    keep_all = {s: compared_samples(meas[s]) for s in sigs}
+    keep_all = compared_masks(model, guess, meas)
     unit, scales = residual_scales(meas, keep_all)
     t_fit = times[mask]
     node = node or next((s[2:] for s in sigs if s.startswith("p_")), None)
@@ -303,7 +304,26 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
                      "alignment": aligned, "jacobian": res.jac, "start_state": state,
                      "model": model, "recording": where,
                      "compared": {s: int(keep_all[s].sum()) for s in sigs},
+                     "keep": keep_all,
                      "compared_from_s": settle_until})
+
+
+def compared_masks(model: TraceModel, values: dict, measured: dict) -> dict:
+    """{signal: samples compared}: every sample of a pressure at a node the netlist gives
+    a volume (its edges, however fast, are the model's to follow: they tell a resistance
+    from a volume); elsewhere all but those around a recorded jump
+    (:func:`~pneunet.truth.circuits.data.compared_samples`: an algebraic node jumps at a
+    valve's fold, where a few ms of timing would decide the error).  Decided on the
+    netlist without effects, so that every candidate is compared on the same samples."""
+    from ...engine.assembly import CircuitDAE
+
+    circuit = model.base_circuit(values)
+    circuit.options = circuit.options.replace(dead_volume=0.0)
+    dae = CircuitDAE(circuit)
+    stored = {n for n, d in zip(dae.node_names, dae.differential)
+              if d and n not in dae.state_nodes}
+    return {s: np.ones(len(y), bool) if s.startswith("p_") and s[2:] in stored
+            else compared_samples(y) for s, y in measured.items()}
 
 
 def _clock_again(model, values, df, state, mode, where):

@@ -40,12 +40,20 @@ class ScreenTask:
         model = TraceModel(*self.model_args[0], effects=(*self.on_top, eff),
                            budget=SCREEN_BUDGET, **self.model_args[1])
         fun = TraceResidual(model, names, *self.data)
-        xb = self._recentred(model, names, theta)
+        xb, moved = self._recentred(model, names, theta)
         if model.failures:  # a point the circuit cannot be simulated at: no more time on it
             return self._failed(model)
         r = fun(np.concatenate([xb, theta]))
         if model.failures:
             return self._failed(model)
+        for _ in range(0 if moved else SCREEN_GN):
+            step = np.linalg.lstsq(self.jac, -r, rcond=None)[0]
+            step *= min(1.0, SCREEN_GN_STEP / max(np.max(np.abs(step)), 1e-300))
+            trial = np.clip(xb + step, *self.bounds)
+            r1 = fun(np.concatenate([trial, theta]))
+            if model.failures or r1 @ r1 >= r @ r:
+                break
+            xb, r = trial, r1
         left = r - self.jac @ np.linalg.lstsq(self.jac, r, rcond=None)[0]
         return {"x": self._values(xb), "rss": float(left @ left), "simulations": model.calls,
                 "at": (xb, r)}
@@ -84,7 +92,7 @@ class ScreenTask:
         times, sigs, meas = self.data[0], self.data[1], self.data[2]
         node = next((s for s in sigs if s.startswith("p_")), None)
         if node is None:
-            return self.x_base
+            return self.x_base, False
         x = np.concatenate([self.x_base, theta])
         lb = np.concatenate([self.bounds[0], theta])
         ub = np.concatenate([self.bounds[1], theta])
@@ -92,8 +100,10 @@ class ScreenTask:
             x, info = initial_values(model, names, x, lb, ub, times, meas[node], node[2:],
                                      iterations=1)
         except PneunetError:
-            return self.x_base
-        return x[:len(self.x_base)] if info.get("method") != "none" else self.x_base
+            return self.x_base, False
+        if info.get("method") == "none":
+            return self.x_base, False
+        return x[:len(self.x_base)], True
 
 
 #: the screen's third best is fitted fully when its merit (fit-window residual sum of
@@ -103,6 +113,11 @@ class ScreenTask:
 SCREEN_KEEP = 2.25
 #: largest change of a base parameter (ln value) in a kept candidate's start step
 SCREEN_STEP = 0.25
+#: Gauss–Newton steps in the base parameters (the base fit's Jacobian, one simulation
+#: each, at most SCREEN_GN_STEP in ln value) at each screening point of a circuit whose
+#: cycle does not re-centre them (a driven one)
+SCREEN_GN = 2
+SCREEN_GN_STEP = 0.5
 #: a screening point's simulation budget, (× the base fit's typical simulation, at
 #: least s): a point that makes the circuit this much stiffer (a long thin tube with no
 #: volume) is a failed point, as it would be in a fit, not seconds lost

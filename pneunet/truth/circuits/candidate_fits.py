@@ -1,0 +1,267 @@
+"""The full fits of a circuit diagnosis' candidate effects, after the screen
+(:mod:`pneunet.truth.circuits.screen`): the most promising singles from their screen
+points, more where the screen cannot tell them apart, second starts, a second effect
+on top of the best single, and the parsimony refits (the best single again from a
+pair's values, the base model again from the best model's values).  Used by
+:func:`~pneunet.truth.circuits.diagnosis.diagnose_trace`."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ...common.errors import SolverError
+from ..core.verdict import Step, at_floor
+from .data import signal_of_column
+from .fit import TraceFit, fit_trace, near_bound
+from .screen import SCREEN_KEEP, screen_candidates, step_starts
+
+
+class CandidateFits:
+    """The full fits of candidate effects within one diagnosis (each from given starting
+    values: the screen's best point, or a second start, the effect's own guess or its
+    range's log-middle); pairs started from each single fit's own values."""
+
+    def __init__(self, build, df, params, fixed, node, train, test, base, pool, options,
+                 where, state, floor, tolerance):
+        self.build, self.df, self.params, self.fixed, self.node = build, df, params, fixed, node
+        self.train, self.test, self.base, self.pool, self.options = train, test, base, pool, options
+        self.where, self.state, self.floor, self.tolerance = where, state, floor, tolerance
+        self.failed = {}  # effect name -> why it has no fit
+        self.starts = {}  # effect name -> [{start values, held-out rms, simulations}]
+
+    def _fit(self, effs, x_start, max_nfev):
+        p = {k: (float(np.clip(self.base.values[k], lo, hi)), lo, hi)
+             for k, (_, lo, hi) in self.params.items()}
+        for e in effs:
+            p.update(e.params)
+        x = self.base_start()
+        x.update(x_start)
+        for k in p:
+            x.setdefault(k, p[k][0])
+        return fit_trace(self.build, self.df, p, fixed=self.fixed, node=self.node,
+                         window=self.train, effects=effs, max_nfev=max_nfev, pool=self.pool,
+                         options=self.options, x_start=x, where=self.where,
+                         start_state=self.state)
+
+    def base_start(self, guesses: bool = False) -> dict:
+        """Starting values of the base parameters: the base fit's, except where it
+        stopped at a bound of its range (a base model bent to mimic missing physics),
+        or everywhere with ``guesses``: the user's guesses."""
+        out = {}
+        for k, (guess, lo, hi) in self.params.items():
+            v = self.base.values[k]
+            out[k] = guess if guesses or near_bound(v, lo, hi) else v
+        return out
+
+    def reached(self, fits) -> bool:
+        """Whether a fitted candidate in ``fits`` reaches the noise floor (held out)."""
+        return any(at_floor(f.error(self.test), self.floor, self.tolerance)
+                   for n, f in fits.items() if n != "none")
+
+    def start(self, eff, x_start, max_nfev) -> TraceFit | None:
+        """The fit of ``eff`` (None: the base model) from ``x_start`` (its parameters;
+        the base ones from the base fit's or the screen's); None (and why in ``failed``)
+        when it fails.  Every start is listed in ``starts``."""
+        name = "none" if eff is None else eff.name
+        try:
+            fit = self._fit(() if eff is None else (eff,), x_start, max_nfev)
+        except SolverError as err:
+            self.failed.setdefault(name, f"fit failed: {err}")
+            return None
+        self.starts.setdefault(name, []).append(
+            {"start": {k: float(x_start[k]) for k in (eff or self).params if k in x_start},
+             "held_out_rms": fit.error(self.test), "simulations": fit.extras.get("simulations")})
+        return fit
+
+    def pair(self, effects, x_start, max_nfev, notes) -> TraceFit | None:
+        """Two effects at once from ``x_start`` (a single fit's own values and the
+        second's start, never values a failed fit left at a bound); None (and why in
+        ``notes``) when it fails."""
+        try:
+            return self._fit(effects, x_start, max_nfev)
+        except SolverError as err:
+            notes.append(f"{' + '.join(e.name for e in effects)}: fit failed: {err}")
+            return None
+
+
+def fit_screened(rows, fits, fitting, screen, max_nfev, say) -> None:
+    """Fit the screened candidates ``rows`` (best first) into ``fits``: the best two and
+    a third (``screen``: at most that many) within :data:`SCREEN_KEEP` of the best's
+    merit, each from its screen's best point moved by one Gauss–Newton step.  When none
+    reaches the floor, the next candidates the screen cannot tell from the best (merit
+    within :data:`SCREEN_KEEP`), in its order, until one does: around a base fit bent
+    far by the missing effect, the screen's linearisation ranks the right one anywhere
+    (heat exchange in one of the inverter chain's volumes: 11th of 13, every merit
+    within 7 %).  Then a second start for each of the first round, best first."""
+    best_rss = rows[0]["rss"]
+    close = rows[:min(2, screen)] + [r for r in rows[2:screen] if r["rss"] <= SCREEN_KEEP * best_rss]
+    more = [r for r in rows[len(close):] if r["rss"] <= SCREEN_KEEP * best_rss]
+    step_starts(close, fitting.pool)
+    for row in close:
+        _fit_row(row, fits, fitting, max_nfev, say)
+    for row in more:
+        if fitting.reached(fits):
+            break
+        step_starts([row], fitting.pool)
+        _fit_row(row, fits, fitting, max_nfev, say)
+    if fitting.reached(fits):
+        return
+    for row in close:
+        eff = row["effect"]
+        if eff.name not in fits and eff.name not in fitting.failed:
+            continue
+        say(f"fitting {eff.name} from a second start")
+        second = {k: _second_start(v, row["x"].get(k)) for k, v in eff.params.items()}
+        fit = fitting.start(eff, {**fitting.base_start(guesses=True), **second}, max_nfev)
+        if fit is not None and (eff.name not in fits or fit.error(fitting.test)
+                                < fits[eff.name].error(fitting.test)):
+            fits[eff.name] = fit
+            fitting.failed.pop(eff.name, None)
+        if fitting.reached(fits):
+            break
+
+
+def _fit_row(row, fits, fitting, max_nfev, say) -> None:
+    """The full fit of one screened candidate from its screen's best point."""
+    eff = row["effect"]
+    if not math.isfinite(row["rss"]):
+        fitting.failed[eff.name] = ("not fitted: the circuit could not be simulated at any "
+                                    "point of its parameter range")
+        return
+    say(f"fitting {eff.name}")
+    fit = fitting.start(eff, row["x"], max_nfev)
+    if fit is not None:
+        fits[eff.name] = fit
+
+
+def second_effects(fits, best, fitted, cand, params, fitting, model_setup, df, train, pool,
+                    say):
+    """Second effects to fit with ``best`` (a single effect that improved on the base
+    model but did not reach the floor), each with its start values: the best of every
+    other candidate screened again on top of ``best``'s fit (an effect the wrong base
+    model hid: its screen ran around a base fit bent to mimic two effects), then the next
+    single fit that did not stop at a bound, started from ``best``'s values."""
+    first = fits[best]
+    build, fixed, options, state = model_setup
+    names = list(first.values)
+    p2 = {**params, **first.effects[0].params}
+    others = [e for e in cand if e.name != best]
+    out = []
+    if others:
+        say(f"screening {len(others)} candidate effects on top of {best}")
+        typical = first.wall_time_s / max(first.nfev, 1)
+        rows = screen_candidates(
+            others, names, np.log([first.values[k] for k in names]), first.extras["jacobian"],
+            p2, ((build, fixed), {"options": options, "typical_s": typical, "state": state}),
+            fit_data(df, train, first), pool, on_top=first.effects)
+        step_starts(rows[:1], pool)
+        if math.isfinite(rows[0]["rss"]):
+            out.append((rows[0]["effect"], rows[0]["x"]))
+    usable = [n for n in fitted[1:] if not at_bound(fits[n])]
+    if usable and all(e.name != usable[0] for e, _ in out):
+        e2 = fits[usable[0]].effects[0]
+        out.append((e2, {**first.values, **{k: fits[usable[0]].values[k] for k in e2.params}}))
+    return out
+
+
+def fit_pairs(fits, best, seconds, steps, fitting, max_nfev, notes, say):
+    """Fit ``best`` with each second effect of ``seconds`` in turn until a pair reaches
+    the floor; the best pair so far is the waterfall's last step."""
+    test, floor, tolerance = fitting.test, fitting.floor, fitting.tolerance
+    for nxt, x_start in seconds:
+        say(f"fitting {best} + {nxt.name}")
+        pair = fitting.pair((fits[best].effects[0], nxt), x_start, max_nfev, notes)
+        name = f"{best} + {nxt.name}"
+        if pair is None or (name in fits and fits[name].error(test) <= pair.error(test)):
+            continue
+        fits[name] = pair
+        if pair.error(test) < steps[-1].held_out:
+            if len(steps) > 2:
+                steps.pop()
+            steps.append(Step(nxt.name, pair.error(test), effects=(best, nxt.name)))
+        if at_floor(pair.error(test), floor, tolerance):
+            break
+
+
+def single_refit_from_pair(fits, best, steps, fitting, max_nfev, say) -> bool:
+    """Parsimony: when a pair reached the floor, ``best`` alone again from the pair's
+    values (a single fit that stopped in a wrong valley, a second effect making up for
+    it); True when that single fit is better than ``best``'s first (it replaces it)."""
+    test, floor, tolerance = fitting.test, fitting.floor, fitting.tolerance
+    if len(steps) < 3 or not at_floor(steps[-1].held_out, floor, tolerance):
+        return False
+    pair = fits[" + ".join(steps[-1].effects)]
+    drop = pair.effects[1].params
+    say(f"fitting {best} again from the pair's values")
+    again = fitting.start(pair.effects[0], {k: v for k, v in pair.values.items()
+                                            if k not in drop}, max_nfev)
+    if again is None or again.error(test) >= fits[best].error(test):
+        return False
+    fits[best] = again
+    steps[1] = Step(best, again.error(test), effects=(best,))
+    if at_floor(again.error(test), floor, tolerance):
+        steps.pop()  # the second effect is not needed
+    return True
+
+
+def base_refit(fits, steps, fitting, max_nfev, notes, say) -> bool:
+    """Parsimony: the base model again from the best model's values of its parameters
+    (a base fit that stopped in a wrong valley, an effect merely escaping it); True when
+    that fit is better than the base fit (it replaces it, and the verdict is decided on
+    it: an effect is accepted only where the base model cannot reach the floor)."""
+    if len(steps) < 2 or steps[-1].held_out >= steps[0].held_out:
+        return False
+    name = " + ".join(steps[-1].effects)
+    best = fits[name]
+    say(f"fitting the base model again from {name}'s values")
+    again = fitting.start(None, {k: best.values[k] for k in fitting.params}, max_nfev)
+    if again is None or again.error(fitting.test) >= steps[0].held_out:
+        return False
+    notes.append(f"base model fitted again from {name}'s values: held-out error "
+                 f"{steps[0].held_out:.4g} → {again.error(fitting.test):.4g} {again.unit}")
+    fits["none"] = again
+    steps[0] = Step(steps[0].label, again.error(fitting.test))
+    return True
+
+
+def _second_start(spec, first):
+    """A second starting value of an effect parameter ``spec`` = (guess, low, high):
+    its guess, or when the first start was near it, the log-middle of its range."""
+    guess, lo, hi = spec
+    mid = math.sqrt(lo * hi)
+    if first is None or abs(math.log(first / guess)) > 0.5:
+        return guess
+    return mid
+
+
+def unfitted_row(row, failed, n_res) -> dict:
+    name = row["effect"].name
+    return {"effect": name, "held_out_rms": None, "fitted": False,
+            "status": "failed" if name in failed else "screened out",
+            "screen_rms": math.sqrt(row["rss"] / n_res) if math.isfinite(row["rss"]) else None,
+            "screen_values": {k: float(v) for k, v in row["x"].items()},
+            "note": failed.get(name, "not fitted: across its parameter range it fits the first "
+                                     "cycles worse than the ones fitted fully")}
+
+
+def fit_data(df, window, base: TraceFit):
+    """(times, signals, measured, keep, scales) of the fit window, as the base fit."""
+    times = df["time_s"].to_numpy()
+    mask = (times >= window[0]) & (times <= window[1])
+    sigs = base.signals()
+    cols = {signal_of_column(c): c for c in df.columns if c != "time_s"}
+    meas = {s: df[cols[s]].to_numpy() for s in sigs}
+    keep = {s: base.extras["keep"][s][mask] for s in sigs}  # as the base fit compared
+    return (times[mask], sigs, {s: meas[s][mask] for s in sigs}, keep, base.scales,
+            base.extras.get("alignment"))
+
+
+def at_bound(fit: TraceFit) -> str:
+    """'k = value' of the first of the fit's effect parameters that stopped at a bound of
+    its range, or ''."""
+    for e in fit.effects:
+        for k, (_, lo, hi) in e.params.items():
+            if near_bound(fit.values[k], lo, hi):
+                return f"{k} = {fit.values[k]:.4g}"
+    return ""
