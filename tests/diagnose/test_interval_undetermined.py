@@ -74,6 +74,27 @@ def test_other_powers_are_written_out():
     assert combo["value"] == pytest.approx(want, rel=1e-9)
 
 
+def test_a_combination_whose_interval_passes_the_floats_is_only_named():
+    """A direction 0.9999 in one parameter and 0.0145 in another is the combination
+    a·b^69; with a spread of 120 in ln value its interval's ends, e^(±1500), are past
+    the floats (a driven circuit's control-line tube raised OverflowError here): the
+    parameters are named as moving together, nothing claimed about a combination."""
+    from pneunet.truth.core.intervals import combinations, undetermined_note
+
+    v = np.array([0.0, 0.0, 0.9999, 0.0145])
+    v /= np.linalg.norm(v)
+    cov = np.diag([1e-3, 1e-3, 1.5e4, 1.5e4])
+    (combo,) = combinations([v], ["R", "V", "R_tube", "V_tube"],
+                            np.log([0.2, 30.0, 0.2, 0.03]), [cov], 12.7)
+    assert combo == {"parameters": ["R_tube", "V_tube"]}
+    assert "move together" in undetermined_note([combo])
+    # a narrower spread keeps its combination and finite ends
+    (combo,) = combinations([v], ["R", "V", "R_tube", "V_tube"],
+                            np.log([0.2, 30.0, 0.2, 0.03]), [cov * 1e-7], 12.7)
+    assert combo["combination"] == "R_tube/V_tube^69"
+    assert all(np.isfinite(combo["ci"]))
+
+
 def test_a_weakly_determined_direction_keeps_its_wide_finite_interval():
     """Not an invariance: R·V and R separately (a second term that sees R alone, 1e-3
     of the signal) — the interval is wide but finite, as the formula says."""

@@ -62,12 +62,18 @@ def sandwich_of(bread, meat):
     return cov
 
 
+#: ln of the largest float: a combination whose interval reaches past it is no more
+#: determined than its parameters
+_LN_MAX = math.log(np.finfo(float).max)
+
+
 def combinations(directions, names, x, covs, tq, log=True) -> list[dict]:
     """What the record does determine along each undetermined direction of two
     parameters: a·b^k (k = −v_a/v_b: the product for k = 1, the ratio for −1) with its
     value and interval (``covs``: covariances on the determined directions, the widest
     of them counts, as in :func:`intervals`; ``tq``: the interval's quantile).  Longer
-    directions: only who moves."""
+    directions, and a combination whose interval reaches past the floats (a·b^69): only
+    who moves."""
     out = []
     for v in directions:
         idx = [int(i) for i in np.argsort(-np.abs(v)) if abs(v[i]) > UNDETERMINED_SHARE]
@@ -80,6 +86,9 @@ def combinations(directions, names, x, covs, tq, log=True) -> list[dict]:
         w = np.zeros(len(x))
         w[i], w[j] = 1.0, k
         c, se = float(w @ x), math.sqrt(max(max(float(w @ cov @ w) for cov in covs), 0.0))
+        if log and not abs(c) + tq * se < _LN_MAX:  # nor is the combination determined
+            out.append({"parameters": who})
+            continue
         conv = math.exp if log else (lambda u: u)
         power = "" if abs(abs(k) - 1) < 0.005 else f"^{abs(k):.2g}"
         expr = f"{a}{'·' if k > 0 else '/'}{b}{power}"
