@@ -150,7 +150,7 @@ def second_effects(fits, best, fitted, cand, params, fitting, model_setup, df, t
     out = []
     if others:
         say(f"screening {len(others)} candidate effects on top of {best}")
-        typical = first.wall_time_s / max(first.nfev, 1)
+        typical = first.extras["model"].typical_s
         rows = screen_candidates(
             others, names, np.log([first.values[k] for k in names]), first.extras["jacobian"],
             p2, ((build, fixed), {"options": options, "typical_s": typical, "state": state}),

@@ -260,7 +260,7 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
             x_hat = np.log([base.values[k] for k in names])
             data_fit = fit_data(df, train, base)
             n_res = sum(int(v.sum()) for v in data_fit[3].values())
-            typical = base.wall_time_s / max(base.nfev, 1)
+            typical = base.extras["model"].typical_s
             rows = screen_candidates(cand, names, x_hat, base.extras["jacobian"], params,
                                      ((build, fixed), {"options": options,
                                                        "typical_s": typical, "state": state}),
