@@ -47,13 +47,9 @@ class ScreenTask:
         if model.failures:
             return self._failed(model)
         for _ in range(0 if moved else SCREEN_GN):
-            step = np.linalg.lstsq(self.jac, -r, rcond=None)[0]
-            step *= min(1.0, SCREEN_GN_STEP / max(np.max(np.abs(step)), 1e-300))
-            trial = np.clip(xb + step, *self.bounds)
-            r1 = fun(np.concatenate([trial, theta]))
-            if model.failures or r1 @ r1 >= r @ r:
+            xb, r, better = self._damped_step(fun, model, xb, r, theta, SCREEN_GN_STEP)
+            if not better:
                 break
-            xb, r = trial, r1
         left = r - self.jac @ np.linalg.lstsq(self.jac, r, rcond=None)[0]
         return {"x": self._values(xb), "rss": float(left @ left), "simulations": model.calls,
                 "at": (xb, r)}
@@ -68,12 +64,20 @@ class ScreenTask:
         model = TraceModel(*self.model_args[0], effects=(*self.on_top, self.effect),
                            budget=SCREEN_BUDGET, **self.model_args[1])
         fun = TraceResidual(model, self.names + list(self.effect.params), *self.data)
+        xb, _, _ = self._damped_step(fun, model, xb, r, theta, SCREEN_STEP)
+        return self._values(xb), model.calls
+
+    def _damped_step(self, fun, model, xb, r, theta, cap):
+        """One Gauss–Newton step in the base parameters from ``xb`` (residual ``r``) with
+        the base fit's Jacobian, at most ``cap`` in ln value (one simulation): (xb, r,
+        True) at the new point where it lowers the residual, else the old and False."""
         step = np.linalg.lstsq(self.jac, -r, rcond=None)[0]
-        step *= min(1.0, SCREEN_STEP / max(np.max(np.abs(step)), 1e-300))
+        step *= min(1.0, cap / max(np.max(np.abs(step)), 1e-300))
         trial = np.clip(xb + step, *self.bounds)
         r1 = fun(np.concatenate([trial, theta]))
-        better = not model.failures and r1 @ r1 < r @ r
-        return self._values(trial if better else xb), model.calls
+        if model.failures or r1 @ r1 >= r @ r:
+            return xb, r, False
+        return trial, r1, True
 
     def _values(self, xb):
         values = dict(zip(self.names, np.exp(xb)))
