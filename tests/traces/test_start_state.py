@@ -115,10 +115,10 @@ def test_mid_run_oscillator_fit_covers_the_truth_where_rest_fails():
     # compared from the first cycle start on (the unrecorded states settle before it),
     # and the diagnosis' screen compares the same samples as the fit's Jacobian
     assert 0.0 < fit.extras["compared_from_s"] < 2.0
-    from pneunet.truth.circuits.candidate_fits import fit_data
+    from pneunet.truth.circuits.candidate_fits import screen_data
 
-    keep = fit_data(read_trace(rec), (0.0, 6.0), fit)[3]
-    assert sum(int(k.sum()) for k in keep.values()) == fit.extras["jacobian"].shape[0]
+    data, jac = screen_data(read_trace(rec), (0.0, 6.0), fit)
+    assert sum(int(k.sum()) for k in data[3].values()) == jac.shape[0]
     rest = fit_trace(oscillator, rec, PARAMS, node="tank", window=(0.0, 6.0),
                      start_state="rest")
     assert rest.error() > 3 * fit.error()

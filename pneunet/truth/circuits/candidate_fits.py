@@ -12,7 +12,7 @@ import numpy as np
 
 from ...common.errors import SolverError
 from ..core.verdict import Step, at_floor
-from .data import signal_of_column
+from .data import compared_samples, signal_of_column
 from .fit import TraceFit, fit_trace, near_bound
 from .screen import SCREEN_KEEP, screen_candidates, step_starts
 
@@ -151,10 +151,11 @@ def second_effects(fits, best, fitted, cand, params, fitting, model_setup, df, t
     if others:
         say(f"screening {len(others)} candidate effects on top of {best}")
         typical = first.extras["model"].typical_s
+        data, jac = screen_data(df, train, first)
         rows = screen_candidates(
-            others, names, np.log([first.values[k] for k in names]), first.extras["jacobian"],
-            p2, ((build, fixed), {"options": options, "typical_s": typical, "state": state}),
-            fit_data(df, train, first), pool, on_top=first.effects)
+            others, names, np.log([first.values[k] for k in names]), jac, p2,
+            ((build, fixed), {"options": options, "typical_s": typical, "state": state}),
+            data, pool, on_top=first.effects)
         step_starts(rows[:1], pool)
         if math.isfinite(rows[0]["rss"]):
             out.append((rows[0]["effect"], rows[0]["x"]))
@@ -245,16 +246,23 @@ def unfitted_row(row, failed, n_res) -> dict:
                                      "cycles worse than the ones fitted fully")}
 
 
-def fit_data(df, window, base: TraceFit):
-    """(times, signals, measured, keep, scales) of the fit window, as the base fit."""
+def screen_data(df, window, fit: TraceFit):
+    """The screen's data on the fit window, (times, signals, measured, keep, scales,
+    alignment), and ``fit``'s Jacobian on those samples: the fit's compared samples less
+    those around a recorded jump, a storage node's too (a grid point misses a 400 kPa
+    edge's timing by a fraction of a sample; that misfit, alike for every candidate,
+    would hide the differences the screen looks for)."""
     times = df["time_s"].to_numpy()
     mask = (times >= window[0]) & (times <= window[1])
-    sigs = base.signals()
+    sigs = fit.signals()
     cols = {signal_of_column(c): c for c in df.columns if c != "time_s"}
     meas = {s: df[cols[s]].to_numpy() for s in sigs}
-    keep = {s: base.extras["keep"][s][mask] for s in sigs}  # as the base fit compared
-    return (times[mask], sigs, {s: meas[s][mask] for s in sigs}, keep, base.scales,
-            base.extras.get("alignment"))
+    fitted = {s: fit.extras["keep"][s][mask] for s in sigs}  # as the fit compared
+    keep = {s: fitted[s] & compared_samples(meas[s])[mask] for s in sigs}
+    rows = np.concatenate([keep[s][fitted[s]] for s in sigs])
+    data = (times[mask], sigs, {s: meas[s][mask] for s in sigs}, keep, fit.scales,
+            fit.extras.get("alignment"))
+    return data, fit.extras["jacobian"][rows]
 
 
 def at_bound(fit: TraceFit) -> str:

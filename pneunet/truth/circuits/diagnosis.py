@@ -27,9 +27,9 @@ from ..core.locate import best_lag, hot_phases, phase_profile
 from ..core.noise import ROUNDING_SIGMA, difference_sigma, resolution, segments
 from ..core.verdict import TOLERANCE, Step, at_floor, decide
 from ..core.waterfall import Waterfall
-from .candidate_fits import (CandidateFits, at_bound, base_refit, fit_data, fit_pairs,
-                             fit_screened, second_effects, single_refit_from_pair,
-                             unfitted_row)
+from .candidate_fits import (CandidateFits, at_bound, base_refit, fit_pairs,
+                             fit_screened, second_effects, screen_data,
+                             single_refit_from_pair, unfitted_row)
 from .data import read_trace, signal_of_column, signal_unit, split_by_cycles
 from .effects import candidates_for
 from .fit import TraceFit, fit_trace
@@ -258,10 +258,10 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
             t0 = time.perf_counter()
             names = list(params)
             x_hat = np.log([base.values[k] for k in names])
-            data_fit = fit_data(df, train, base)
+            data_fit, jac = screen_data(df, train, base)
             n_res = sum(int(v.sum()) for v in data_fit[3].values())
             typical = base.extras["model"].typical_s
-            rows = screen_candidates(cand, names, x_hat, base.extras["jacobian"], params,
+            rows = screen_candidates(cand, names, x_hat, jac, params,
                                      ((build, fixed), {"options": options,
                                                        "typical_s": typical, "state": state}),
                                      data_fit, pool)
