@@ -32,3 +32,27 @@ def test_inverter_outputs_with_their_volumes_are_compared_everywhere():
     inv = TraceModel(NetlistBuilder("netlists/inverter.pn"))
     masks = compared_masks(inv, {"Rpull": 23.0}, {"p_out1": STEP, "p_out2": STEP[::-1]})
     assert masks["p_out1"].all() and masks["p_out2"].all()
+
+
+def test_the_screen_leaves_a_storage_nodes_edges_out_with_the_jacobians_rows():
+    """The fit compares out1's edges, the screen does not (a grid point misses an edge's
+    timing alike for every candidate); the Jacobian handed to the screen has exactly the
+    rows of the samples it compares, in the same order."""
+    from pneunet.truth.circuits import fit_trace
+    from pneunet.truth.circuits.candidate_fits import screen_data
+    from pneunet.truth.circuits.data import compared_samples, read_trace
+
+    from .standalone_inverter import inverter_record
+
+    rec = read_trace(inverter_record(0.5, 6.0, dt=0.02, noise=0.3, seed=1, Rpull=23.0))
+    fit = fit_trace(NetlistBuilder("netlists/inverter.pn"), rec, {"Rpull": (23.0, 2.0, 200.0)},
+                    node="out1", max_nfev=6)
+    assert fit.extras["keep"]["p_out1"].all()  # the fit: every sample
+    data, jac = screen_data(rec, (0.0, 6.0), fit)
+    keep = data[3]
+    y = rec["p_out1_kPa"].to_numpy()
+    np.testing.assert_array_equal(keep["p_out1"], compared_samples(y))
+    assert not keep["p_out1"].all()
+    rows = np.concatenate([keep[s][fit.extras["keep"][s]] for s in data[1]])
+    np.testing.assert_array_equal(jac, fit.extras["jacobian"][rows])
+    assert jac.shape[0] == sum(int(k.sum()) for k in keep.values())
