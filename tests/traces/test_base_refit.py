@@ -1,0 +1,66 @@
+"""Parsimony before an effect is accepted (candidate_fits.base_refit): the base model
+fitted again from the best model's values of its parameters replaces a base fit that
+stopped in a wrong valley, and the verdict is then decided on it."""
+from types import SimpleNamespace
+
+from pneunet.truth.circuits.candidate_fits import base_refit
+from pneunet.truth.core.verdict import Step, decide
+
+TEST = (10.0, 20.0)
+
+
+class Fit(SimpleNamespace):
+    def error(self, window=None):
+        assert window == TEST
+        return self.held_out
+
+
+class Fitting:
+    """Stand-in for CandidateFits: records the start it was given, returns ``refit``."""
+
+    params = {"Rpull": (20.0, 2.0, 200.0), "V": (2.5, 0.2, 20.0)}
+    test = TEST
+
+    def __init__(self, refit):
+        self.refit, self.started = refit, []
+
+    def start(self, eff, x_start, max_nfev):
+        self.started.append((eff, dict(x_start), max_nfev))
+        return self.refit
+
+
+def setup(refit_error):
+    fits = {"none": Fit(held_out=5.0, unit="kPa", values={"Rpull": 160.0, "V": 0.5}),
+            "tube@X1.in": Fit(held_out=0.31, unit="kPa",
+                              values={"Rpull": 23.0, "V": 3.5, "R_tube@X1.in": 0.03})}
+    steps = [Step("base model", 5.0), Step("tube@X1.in", 0.31, effects=("tube@X1.in",))]
+    refit = None if refit_error is None else Fit(held_out=refit_error, unit="kPa",
+                                                   values={"Rpull": 23.0, "V": 3.5})
+    return fits, steps, Fitting(refit)
+
+
+def test_a_base_fit_in_a_wrong_valley_is_replaced_and_the_effect_not_needed():
+    fits, steps, fitting = setup(0.30)
+    notes = []
+    assert base_refit(fits, steps, fitting, 120, notes, print)
+    # started from the best model's base values only (not its effect's), the base budget
+    assert fitting.started == [(None, {"Rpull": 23.0, "V": 3.5}, 120)]
+    assert fits["none"] is fitting.refit and steps[0].held_out == 0.30
+    assert decide(steps, 0.3) == ("adequate", [])
+    assert "5 → 0.3 kPa" in notes[0]
+
+
+def test_a_refit_no_better_than_the_base_changes_nothing():
+    for err in (5.0, 7.0, None):  # as good, worse, failed
+        fits, steps, fitting = setup(err)
+        base = fits["none"]
+        assert not base_refit(fits, steps, fitting, 120, [], print)
+        assert fits["none"] is base and steps[0].held_out == 5.0
+        assert decide(steps, 0.3) == ("explained", ["tube@X1.in"])
+
+
+def test_nothing_is_refitted_when_no_model_beats_the_base():
+    fits, steps, fitting = setup(0.30)
+    steps[1] = Step("tube@X1.in", 6.0, effects=("tube@X1.in",))
+    assert not base_refit(fits, steps, fitting, 120, [], print)
+    assert fitting.started == []
