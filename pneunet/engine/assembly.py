@@ -378,6 +378,13 @@ class CircuitDAE:
     def node_index(self, name: str) -> int:
         return self._index[name]
 
+    @property
+    def stored_pressure_nodes(self) -> list[str]:
+        """Nodes whose pressure is a stored state (a volume at them), elements' own
+        states left out."""
+        return [n for n, d in zip(self.node_names, self.differential)
+                if d and n not in self.state_nodes]
+
 
 class AlgebraicBlock:
     """The algebraic equations F_a(y) (ẏ = 0) and their block J_aa = ∂F_a/∂y_a.

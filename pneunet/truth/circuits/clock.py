@@ -138,10 +138,11 @@ def source_clock(circuit, data, origin: float) -> tuple[float, str]:
         return origin, ""
     direct = origin + t_w[-1] <= float(sol.t[-1])
     at_origin = origin if direct else settled + (origin - delay) % period
-    if float(misfit([at_origin])[0]) <= CLOCK_SLACK ** 2 * least:
+    at_file = float(misfit([at_origin])[0])
+    if at_file <= CLOCK_SLACK ** 2 * least:
         return origin, ""
     offset = delay + phase + period * max(1, math.ceil(span / period))
-    ratio = math.sqrt(float(misfit([at_origin])[0]) / least)
+    ratio = math.sqrt(at_file / least)
     note = (f"the file's clock puts the sources' switching {ratio:.3g}× further from the "
             f"record than the best phase: the first sample's netlist time is estimated from "
             f"the record (the sources repeat every {period:g} s; give a time offset to set "

@@ -319,9 +319,7 @@ def compared_masks(model: TraceModel, values: dict, measured: dict) -> dict:
 
     circuit = model.base_circuit(values)
     circuit.options = circuit.options.replace(dead_volume=0.0)
-    dae = CircuitDAE(circuit)
-    stored = {n for n, d in zip(dae.node_names, dae.differential)
-              if d and n not in dae.state_nodes}
+    stored = set(CircuitDAE(circuit).stored_pressure_nodes)
     return {s: np.ones(len(y), bool) if s.startswith("p_") and s[2:] in stored
             else compared_samples(y) for s, y in measured.items()}
 

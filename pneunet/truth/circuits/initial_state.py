@@ -341,8 +341,7 @@ def _rest_state(circuit, t0):
     names = list(dae.node_names) + list(dae.fixed_names)
     rest = dict(zip(names, map(float, dae.full_pressures(t0, y))))
     algebraic = [dae.node_names[i] for i in dae.algebraic_idx]
-    storage = [n for i, n in enumerate(dae.node_names)
-               if dae.differential[i] and n not in dae.state_nodes]
+    storage = dae.stored_pressure_nodes
     return rest, storage, algebraic
 
 
