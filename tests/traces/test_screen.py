@@ -72,3 +72,34 @@ def test_a_kept_candidates_start_is_moved_by_one_damped_gauss_newton_step():
     values, calls = task.step((x_off, r))
     assert calls == 1
     np.testing.assert_allclose(np.log([values[k] for k in NAMES]), x_off, rtol=0, atol=1e-12)
+
+
+def test_a_point_its_cycle_does_not_recentre_takes_gauss_newton_steps(monkeypatch):
+    """A driven circuit has no cycle to re-centre the base parameters on: the point takes
+    up to SCREEN_GN damped Gauss–Newton steps with the base fit's Jacobian (one
+    simulation each, kept while they lower the residual) before its merit is taken; a
+    point its cycle did re-centre takes none."""
+    from pneunet.truth.circuits.model import TraceModel, TraceResidual
+    from pneunet.truth.circuits.screen import SCREEN_GN
+
+    task = _task({"n": 1.0})
+    fun = TraceResidual(TraceModel(oscillator), NAMES + ["n"], *task.data)
+    x_off = np.log(list(BASE.values())) + np.array([0.03, -0.03, 0.03])
+    r0 = fun(np.append(x_off, 0.0))
+    h = 1e-4
+    task.jac = np.column_stack([(fun(np.append(x_off + h * e, 0.0)) - r0) / h
+                                for e in np.eye(3)])
+    task.x_base = x_off
+    monkeypatch.setattr(ScreenTask, "_recentred", lambda self, model, names, theta:
+                        (self.x_base, False))
+    out = task()
+    assert out["simulations"] == 1 + SCREEN_GN
+    moved = np.log([out["x"][k] for k in NAMES])
+    truth = np.log(list(BASE.values()))
+    assert np.max(np.abs(moved - truth)) < 0.6 * np.max(np.abs(x_off - truth))  # towards it
+    assert out["at"][1] @ out["at"][1] < 0.1 * (r0 @ r0)
+    monkeypatch.setattr(ScreenTask, "_recentred", lambda self, model, names, theta:
+                        (self.x_base, True))
+    out = task()
+    assert out["simulations"] == 1
+    np.testing.assert_allclose(np.log([out["x"][k] for k in NAMES]), x_off, atol=1e-12)
