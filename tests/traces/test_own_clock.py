@@ -11,6 +11,7 @@ from pneunet.truth.circuits.initial_state import choose_start
 from pneunet.truth.circuits.model import TraceModel
 from pneunet.physics.waveforms import Pulse, Sine, Step
 from tests.traces.standalone_driven import amplifier_record
+from tests.traces.standalone_inverter import inverter_record
 from tests.traces.test_start_state import AMPLIFIER
 
 PARAMS = {"Rtube.R": (0.2, 0.02, 2.0), "Amck.V": (25.0, 5.0, 200.0)}
@@ -32,7 +33,7 @@ def test_a_record_on_the_loggers_own_clock_is_placed_on_the_sources(clock, secon
     written from the logger's zero (or a Unix time): before, the sources switched 3.4 s
     off and the fit ended 464× the noise floor, unexplained; now the start is at 3.4 s
     into a period, the line's values are covered and the fit is at the noise.  The
-    phase found at the guesses (30 s: 3.392 s) is found again at the fitted values."""
+    phase found at the guesses (30 s: 3.392 s) is fitted with the parameters."""
     rec = amplifier_record(13.4, seconds, dt=0.01, noise=0.3, seed=5, R_line=0.24, V=30.0)
     rec = rec.iloc[:100 * seconds].copy()  # the generator's last two samples are 6e-13 s apart
     rec["time_s"] = clock + 0.01 * np.arange(len(rec))
@@ -65,3 +66,32 @@ def test_a_pulse_at_wall_clock_time_lists_only_its_nearby_corners():
     np.testing.assert_allclose(p.breakpoints(1.7e9, 1.7e9 + 30) - 1.7e9,
                                p.breakpoints(10.0, 40.0) - 10.0, atol=1e-6)
     assert len(p._corners(1.7e9, 1.7e9 + 30)) <= 6  # periods around the window only
+
+
+INVERTER_PARAMS = {"Rpull": (20.0, 2.0, 200.0), "X1.Vout.V": (2.5, 0.2, 20.0),
+                   "X2.Vout.V": (2.5, 0.2, 20.0)}
+INVERTER_TRUTH = {"Rpull": 23.0, "X1.Vout.V": 2.0, "X2.Vout.V": 2.0}
+
+
+@pytest.mark.parametrize("start, dt, clock", [(6.7, 0.02, 0.0), (5.0, 0.025, 1.7e9)])
+def test_the_inverter_chain_on_the_loggers_own_clock(start, dt, clock):
+    """The inverter chain (outputs that rise 400 kPa within one sample, a stand-alone
+    recording, R_pull 23 where the netlist says 20) with the logger's own time column.
+    The phase found at the guesses is 16 ms late (R_pull 15 % off delays the pull-up);
+    fitted from there, LM ended at R_pull 6.8 (phase refound, 9.4 kPa rms) or 19.3
+    (clock fitted with the parameters, 18 kPa).  Now the clock is fitted with the
+    parameters from that phase and from one sample either way: the first sample lands on
+    the sources' phase within a millisecond and every interval covers the truth."""
+    rec = inverter_record(start, 8.0, dt=dt, noise=0.3, seed=3, Rpull=23.0)
+    rec["time_s"] = clock + dt * np.arange(len(rec))
+    fit = fit_trace(NetlistBuilder("netlists/inverter.pn"), rec, INVERTER_PARAMS, node="out1")
+    state = fit.start_state
+    assert "estimated from the record" in state.clock
+    apart = (state.first_time - start) % 4.0  # the PULSE's period
+    assert min(apart, 4.0 - apart) < 1e-3
+    lo, hi = state.clock_ci
+    assert lo <= state.first_time <= hi and hi - lo < 2e-3
+    assert state.to_json()["first_time_ci_s"] == [lo, hi]
+    for k, v in INVERTER_TRUTH.items():
+        assert fit.ci[k][0] <= v <= fit.ci[k][1], (k, fit.ci[k])
+    assert fit.error() < 0.33  # the noise is 0.3 kPa

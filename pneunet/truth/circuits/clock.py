@@ -12,8 +12,8 @@ sample grid (each signal in units of its own noise); the file's clock is kept wh
 gives the best phase or an rms misfit within :data:`CLOCK_SLACK` × the best phase's.
 Else the best phase is used, placed ⌈span/P⌉ periods after the sources' delay (a settled
 history of at least the record's length), and the start state says so.  The phase is
-found at the parameter guesses and again at the fitted values
-(:func:`~pneunet.truth.circuits.fit.fit_trace`).
+found at the parameter guesses; :func:`~pneunet.truth.circuits.fit.fit_trace` then fits
+it with the parameters.
 """
 from __future__ import annotations
 
@@ -74,9 +74,9 @@ def varying_waveforms(circuit, t0: float, t1: float) -> list:
     return out
 
 
-def source_clock(circuit, data, origin: float) -> tuple[float, str]:
-    """(netlist time of the first sample, s; a note, '' when the file's clock is kept)
-    for a recording ``data`` (time_s from 0, p_<node>_kPa columns; the file's first time
+def source_clock(circuit, data, origin: float) -> tuple[float, str, float]:
+    """(netlist time of the first sample, s; a note, '' when the file's clock is kept;
+    the sources' common period, s, 0 when none) for a recording ``data`` (time_s from 0, p_<node>_kPa columns; the file's first time
     stamp ``origin``) of ``circuit`` (at the parameter guesses) driven by its sources."""
     from ..core.noise import record_sigma
     from .data import signal_of_column
@@ -87,7 +87,7 @@ def source_clock(circuit, data, origin: float) -> tuple[float, str]:
     waves = varying_waveforms(circuit, origin, origin + span)
     period = common_period(waves)
     if period is None or len(times) < 10:
-        return origin, ""
+        return origin, "", 0.0
     delay = max(float(getattr(w, "delay", 0.0)) for w in waves)
     dt = float(np.median(np.diff(times)))
     window = times <= min(span, period)
@@ -118,7 +118,7 @@ def source_clock(circuit, data, origin: float) -> tuple[float, str]:
         return total
 
     if not signals:
-        return origin, ""
+        return origin, "", period
     # every phase on a grid of at most SCAN_POINTS, then zoomed in tenfold around the
     # best until the grid is a FINER-th of a sample
     step = max(dt, period / SCAN_POINTS)
@@ -135,16 +135,16 @@ def source_clock(circuit, data, origin: float) -> tuple[float, str]:
     # cycle), else compared on the run from rest where it covers it, else at its phase
     apart = abs(phase - (origin - delay) % period)
     if min(apart, period - apart) <= dt:
-        return origin, ""
+        return origin, "", period
     direct = origin + t_w[-1] <= float(sol.t[-1])
     at_origin = origin if direct else settled + (origin - delay) % period
     at_file = float(misfit([at_origin])[0])
     if at_file <= CLOCK_SLACK ** 2 * least:
-        return origin, ""
+        return origin, "", period
     offset = delay + phase + period * max(1, math.ceil(span / period))
     ratio = math.sqrt(at_file / least)
     note = (f"the file's clock puts the sources' switching {ratio:.3g}× further from the "
             f"record than the best phase: the first sample's netlist time is estimated from "
             f"the record (the sources repeat every {period:g} s; give a time offset to set "
             f"it)")
-    return offset, note
+    return offset, note, period

@@ -191,7 +191,9 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
     'record', 'settled' or a :class:`~pneunet.truth.circuits.initial_state.StartState`
     (:mod:`pneunet.truth.circuits.initial_state`; fitted initial pressures ``p0@NODE`` join the
     estimates); ``time_offset``: netlist time of the first sample (s; default: the
-    file's first time stamp for a driven circuit, else 0).
+    file's first time stamp for a driven circuit, else 0; where the record shows the
+    file's clock misplaces periodic sources, the phase it shows, then fitted with the
+    parameters: :func:`_clock_step`, :func:`_clock_starts`).
 
     Two stages: with ``features`` and an oscillating record at ``node``, starting
     values from the cycle (:mod:`pneunet.truth.circuits.start`); then Levenberg–Marquardt on
@@ -224,7 +226,6 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
     state = start_state if isinstance(start_state, StartState) else choose_start(
         model, guess, df, start_state, time_offset, where)
     model = model.with_state(state)
-    given = params
     params = {**params, **{k: v for k, v in state.fitted.items() if k not in params}}
     names = list(params)
     x0 = np.log([params[k][0] for k in names])
@@ -240,8 +241,9 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
     settle_until = settling_time(state, times, meas.get(f"p_{node}"))
     if settle_until > 0:  # states the record cannot give settle before they are compared
         keep_all = {s: k & (times >= settle_until) for s, k in keep_all.items()}
+    clock_step = _clock_step(state, times)
     fun = TraceResidual(model, names, t_fit, sigs, {s: meas[s][mask] for s in sigs},
-                        {s: keep_all[s][mask] for s in sigs}, scales, aligned)
+                        {s: keep_all[s][mask] for s in sigs}, scales, aligned, clock_step)
     stage1 = None
     if x_start is not None:
         x0 = np.clip(np.log([x_start.get(k, params[k][0]) for k in names]), lb, ub)
@@ -255,23 +257,24 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
         if stage1 is None or stage1.get("method") == "none":
             x0, stage1 = _feature_fit(model, names, x0, lb, ub, t_fit, meas[f"p_{node}"][mask],
                                       node, max_nfev)
+    if clock_step:  # the clock's shift, in sample spacings, within half a period
+        half = 0.5 * state.clock_period / clock_step
+        x0, lb, ub = np.append(x0, 0.0), np.append(lb, -half), np.append(ub, half)
     calls0 = model.calls
     res = least_squares_log(fun, x0, lb, ub, max_nfev=max_nfev, diff_step=diff_step, pool=pool)
-    est = dict(zip(names, np.exp(res.x)))
-    if state.clock and not isinstance(start_state, StartState):
-        # the phase found at the guesses, found again at the fitted values (a tube or a
-        # volume off by 20 % moves the best phase by most of a sample)
-        again = _clock_again(model, est, df, state, start_state, where)
-        if again is not None:
-            return fit_trace(build, df, given, fixed=fixed, node=node, window=window,
-                             effects=effects, max_nfev=max_nfev, confidence=confidence,
-                             phase_bins=phase_bins, start=start, features=features,
-                             diff_step=diff_step, options=options, pool=pool, x_start=est,
-                             where=where, align=align, start_state=again)
+    if clock_step and not isinstance(start_state, StartState):
+        res = _clock_starts(res, fun, x0, lb, ub, max_nfev=max_nfev, diff_step=diff_step,
+                            pool=pool)
+    est = dict(zip(names, np.exp(res.x[:len(names)])))
     groups = np.concatenate([np.full(int(fun.keep[s].sum()), i) for i, s in enumerate(sigs)])
-    ci, se, info = intervals(res.x, res.jac, res.fun, names, groups=groups,
-                             confidence=confidence)
-    bounded = at_bounds(names, res.x, lb, ub)
+    ci, se, info = intervals(res.x, res.jac, res.fun, names + [CLOCK] * bool(clock_step),
+                             groups=groups, confidence=confidence)
+    jac = res.jac
+    if clock_step:
+        state = _clock_fitted(state, res.x[-1], ci.pop(CLOCK), clock_step)
+        se.pop(CLOCK)
+        model, jac = model.with_state(state), jac[:, :len(names)]
+    bounded = at_bounds(names, res.x[:len(names)], lb, ub)
     if bounded:
         info["at_bound"] = bounded
         info["at_bound_note"] = "; ".join(
@@ -301,7 +304,7 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
                     res.message + (f"; {fun.failures} failed simulations" if fun.failures else ""),
                     tuple(effects), sol, time.perf_counter() - wall, unit, scales,
                     {"stage1": stage1, "simulations": nfev, "intervals": info,
-                     "alignment": aligned, "jacobian": res.jac, "start_state": state,
+                     "alignment": aligned, "jacobian": jac, "start_state": state,
                      "model": model, "recording": where,
                      "compared": {s: int(keep_all[s].sum()) for s in sigs},
                      "keep": keep_all,
@@ -324,20 +327,66 @@ def compared_masks(model: TraceModel, values: dict, measured: dict) -> dict:
             else compared_samples(y) for s, y in measured.items()}
 
 
-def _clock_again(model, values, df, state, mode, where):
-    """The start state at the phase of the sources the record shows for the fitted
-    ``values`` (:func:`~pneunet.truth.circuits.clock.source_clock`), None when it is
-    within a tenth of a sample of ``state``'s."""
+#: the name under which a clock estimated from the record is fitted with the parameters
+CLOCK = "t0@clock"
+
+
+def _clock_step(state, times) -> float:
+    """s per unit of the clock's fitted shift (the sample spacing) when ``state``'s
+    clock was estimated from the record, else 0: the phase a grid found at the
+    parameter guesses is off by as much as the guesses move the sources' response (a
+    pull-up 15 % off: most of a sample, where a 400 kPa edge within one sample turns
+    that into a misfit of tens of kPa), so it is fitted with the parameters."""
+    if not state.clock or not state.clock_period or len(times) < 2:
+        return 0.0
+    return float(np.median(np.diff(times)))
+
+
+#: most sample spacings a start of the clock's fit is moved from the phase found
+CLOCK_STARTS = 3
+
+
+def _clock_starts(res, fun, x0, lb, ub, **lsq):
+    """The best of ``res`` (the fit from the clock's phase found at the guesses) and fits
+    from that clock moved by one sample spacing either way, then further in the better
+    direction while that improves (at most :data:`CLOCK_STARTS`): the cost is a narrow
+    valley in the clock and the parameters together, and from the phase found at the
+    guesses LM may not find it (the inverter chain's own-clock recording: 18 kPa rms from
+    the phase found, 0.30 from one sample earlier)."""
     from dataclasses import replace
 
-    from .clock import FINER, source_clock
+    def cost(r):
+        return float(r.fun @ r.fun)
 
-    origin = float(df.attrs.get("time_origin", 0.0))
-    offset, note = source_clock(model.base_circuit(values), df, origin)
-    dt = float(np.median(np.diff(df["time_s"].to_numpy())))
-    if not note or abs(offset - state.first_time) < 0.5 * dt / FINER:
-        return None
-    return replace(choose_start(model, values, df, mode, offset, where), clock=note)
+    def moved(k):
+        x = x0.copy()
+        x[-1] = float(np.clip(x0[-1] + k, lb[-1], ub[-1]))
+        return least_squares_log(fun, x, lb, ub, **lsq)
+
+    used = res.nfev
+    tried = {0: res}
+    for k in (-1, 1):
+        tried[k] = moved(k)
+        used += tried[k].nfev
+    step = -1 if cost(tried[-1]) <= cost(tried[1]) else 1
+    k = step
+    while abs(k) < CLOCK_STARTS and cost(tried[k]) < cost(tried[k - step]):
+        k += step
+        tried[k] = moved(k)
+        used += tried[k].nfev
+    best = min(tried.values(), key=cost)
+    return replace(best, nfev=used)
+
+
+def _clock_fitted(state, shift, ci, step):
+    """``state`` with the fitted clock: moved by ``shift`` sample spacings of ``step`` s,
+    the first sample's netlist time and its interval (``ci``: the interval of exp(shift))."""
+    from dataclasses import replace
+
+    moved = replace(state, time_offset=state.time_offset + float(shift) * step)
+    lo, hi = (moved.first_time + (math.log(c) - float(shift)) * step if c > 0 else -math.inf
+              for c in ci)
+    return replace(moved, clock_ci=(lo, hi))
 
 
 #: a fitted value this close to a bound of its range (in ln value: 1 %) stopped there

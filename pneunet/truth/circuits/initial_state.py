@@ -80,6 +80,8 @@ class StartState:
     reason: str = ""
     signals: dict = field(default_factory=dict)
     clock: str = ""  # how the netlist time of the first sample was found, when not the file's
+    clock_period: float = 0.0  # s, the sources' common period when ``clock`` is set
+    clock_ci: tuple = ()  # s, the interval of the first sample's netlist time once fitted
 
     @property
     def first_time(self) -> float:
@@ -120,14 +122,18 @@ class StartState:
                     f"driven by its sources for {self.settle:.4g} s to the first sample")
         else:
             text = "rest state of the netlist at the first sample"
+        fitted = (f"; fitted with the parameters: {self.first_time:.6g} s "
+                  f"[{self.clock_ci[0]:.6g}, {self.clock_ci[1]:.6g}]") if self.clock_ci else ""
         return f"{text}; circuit {kind}{clock}" + (f" ({self.reason})" if self.reason else "") \
-            + (f"; {self.clock}" if self.clock else "")
+            + (f"; {self.clock}" if self.clock else "") + fitted
 
     def to_json(self) -> dict:
         return {"mode": self.mode, "pressures": dict(self.pressures),
                 "branch_guesses": dict(self.guesses), "fitted": list(self.fitted),
                 "time_offset_s": self.time_offset, "settle_s": self.settle,
                 "driven": self.driven, "reason": self.reason, "clock": self.clock or None,
+                "first_time_s": self.first_time,
+                "first_time_ci_s": list(self.clock_ci) if self.clock_ci else None,
                 "element_signals": dict(self.signals)}
 
 
@@ -259,9 +265,9 @@ def choose_start(model, values: dict, data, mode: str = "auto",
         if sources_vary(circuit, origin, origin + float(times[-1])):
             from .clock import source_clock
 
-            time_offset, clock = source_clock(circuit, data, origin)
+            time_offset, clock, period = source_clock(circuit, data, origin)
     state = _start_at(model, values, data, mode, time_offset, where)
-    return replace(state, clock=clock) if clock else state
+    return replace(state, clock=clock, clock_period=period) if clock else state
 
 
 def _start_at(model, values: dict, data, mode: str, time_offset: float | None,

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import time
+from dataclasses import replace
 from typing import Callable
 
 import numpy as np
@@ -46,6 +47,7 @@ class TraceModel:
         self.build, self.fixed, self.effects, self.start = build, dict(fixed or {}), tuple(effects), start
         self.options = dict(options or {})
         self.state = state  # a StartState (pneunet.truth.circuits.initial_state); None: rest at t = 0
+        self.shift = 0.0  # s added to the state's netlist times (a clock fitted with the rest)
         self.calls = 0
         self.failures = 0  # simulations that failed (SolverError, budget included)
         self._times = [] if typical_s is None else [float(typical_s)]
@@ -62,9 +64,16 @@ class TraceModel:
         return float(np.median(self._times)) if self._times else None
 
     @property
+    def run_state(self):
+        """The start state on the netlist's clock moved by :attr:`shift` (None: rest at 0)."""
+        if self.state is None or not self.shift:
+            return self.state
+        return replace(self.state, time_offset=self.state.time_offset + self.shift)
+
+    @property
     def first_time(self) -> float:
         """Netlist time of the record's first sample, s."""
-        return 0.0 if self.state is None else self.state.first_time
+        return 0.0 if self.state is None else self.state.first_time + self.shift
 
     def base_circuit(self, values: dict):
         """The netlist's circuit at ``values`` (no effects, no start state)."""
@@ -80,11 +89,12 @@ class TraceModel:
 
     def circuit(self, values: dict):
         c = self.base_circuit(values)
-        if self.state is not None:
-            self.state.apply(c, values)
+        state = self.run_state
+        if state is not None:
+            state.apply(c, values)
         settled = None
         if self.start == "ic" and (self.effects or c.options.dead_volume > 0):
-            settled = settled_pressures(c, self.state.time_offset if self.state else 0.0)
+            settled = settled_pressures(c, state.time_offset if state else 0.0)
         old_nodes = set(c.nodes)
         for eff in self.effects:
             eff.apply(c, {k: values.get(k, eff.params[k][0]) for k in eff.params})
@@ -109,7 +119,7 @@ class TraceModel:
         factor, least = self.budget
         budget = max(least, factor * float(np.median(self._times))) if self._times else None
         start = time.process_time()
-        t0 = 0.0 if self.state is None else self.state.time_offset
+        t0 = 0.0 if self.state is None else self.run_state.time_offset
         try:
             with cpu_time_budget(budget):
                 sol = circuit.tran(self.first_time + t_end, t_step=t_step, t_start=t0,
@@ -233,18 +243,23 @@ def sample_at(t, y, times):
 
 class TraceResidual:
     """Scaled residual (simulated − recorded) on the compared samples, for ln-parameters
-    ``x``; a failed simulation gives a large constant residual.  Picklable."""
+    ``x`` (with ``clock_step``, a last entry that moves the netlist's clock by that many s
+    per unit); a failed simulation gives a large constant residual.  Picklable."""
 
     def __init__(self, model: TraceModel, names, times, signals, measured: dict, keep: dict,
-                 scales: dict, align=None):
+                 scales: dict, align=None, clock_step: float = 0.0):
         self.model, self.names, self.times, self.signals = model, list(names), times, signals
         self.measured, self.keep, self.scales, self.align = measured, keep, scales, align
+        self.clock_step = clock_step  # s per unit of a last x that shifts the clock (0: none)
         self.failures = 0
 
     def size(self) -> int:
         return int(sum(self.keep[s].sum() for s in self.signals))
 
     def __call__(self, x):
+        if self.clock_step:
+            self.model.shift = float(x[-1]) * self.clock_step
+            x = x[:-1]
         values = dict(zip(self.names, np.exp(x)))
         try:
             sim, _ = self.model.sample(values, self.times, self.signals, self.align)
