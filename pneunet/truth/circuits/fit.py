@@ -344,19 +344,29 @@ def _clock_step(state, times) -> float:
 
 #: most sample spacings a start of the clock's fit is moved from the phase found
 CLOCK_STARTS = 3
+#: a fit from the phase found whose rms is within this factor of the record's own noise
+#: needs no other start
+CLOCK_AT_NOISE = 2.0
 
 
 def _clock_starts(res, fun, x0, lb, ub, **lsq):
-    """The best of ``res`` (the fit from the clock's phase found at the guesses) and fits
-    from that clock moved by one sample spacing either way, then further in the better
-    direction while that improves (at most :data:`CLOCK_STARTS`): the cost is a narrow
-    valley in the clock and the parameters together, and from the phase found at the
-    guesses LM may not find it (the inverter chain's own-clock recording: 18 kPa rms from
-    the phase found, 0.30 from one sample earlier)."""
+    """``res`` (the fit from the clock's phase found at the guesses) when it is at the
+    record's noise, else the best of it and fits from that clock moved by one sample
+    spacing either way, then further in the better direction while that improves (at
+    most :data:`CLOCK_STARTS`): the cost is a narrow valley in the clock and the
+    parameters together, and from the phase found at the guesses LM may not find it (the
+    inverter chain's own-clock recording: 18 kPa rms from the phase found, 0.30 from one
+    sample earlier)."""
     from dataclasses import replace
 
     def cost(r):
         return float(r.fun @ r.fun)
+
+    noise = [record_sigma(fun.measured[s], segments(fun.keep[s])) / fun.scales[s]
+             for s in fun.signals]
+    noise = math.sqrt(np.nanmean(np.square(noise))) if np.isfinite(noise).any() else math.nan
+    if math.sqrt(cost(res) / max(len(res.fun), 1)) <= CLOCK_AT_NOISE * noise:
+        return res
 
     def moved(k):
         x = x0.copy()
