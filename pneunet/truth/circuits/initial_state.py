@@ -122,8 +122,9 @@ class StartState:
                     f"driven by its sources for {self.settle:.4g} s to the first sample")
         else:
             text = "rest state of the netlist at the first sample"
-        fitted = (f"; fitted with the parameters: {self.first_time:.4f} s "
-                  f"[{self.clock_ci[0]:.4f}, {self.clock_ci[1]:.4f}]") if self.clock_ci else ""
+        fitted = (f"; fitted with the parameters: {self.first_time:.4f} s, 95 % interval "
+                  f"{(self.clock_ci[0] - self.first_time) * 1e3:+.2g} … "
+                  f"{(self.clock_ci[1] - self.first_time) * 1e3:+.2g} ms") if self.clock_ci else ""
         return f"{text}; circuit {kind}{clock}" + (f" ({self.reason})" if self.reason else "") \
             + (f"; {self.clock}" if self.clock else "") + fitted
 
