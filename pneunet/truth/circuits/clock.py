@@ -11,15 +11,25 @@ every phase.  The record's first period is compared with it at every phase on th
 sample grid (each signal in units of its own noise); the file's clock is kept when it
 gives the best phase or an rms misfit within :data:`CLOCK_SLACK` × the best phase's.
 Else the best phase is used, placed ⌈span/P⌉ periods after the sources' delay (a settled
-history of at least the record's length), and the start state says so.  The phase is
-found at the parameter guesses; :func:`~pneunet.truth.circuits.fit.fit_trace` then fits
-it with the parameters.
+history of at least the record's length), and the start state says so.
+
+That phase is found at the parameter guesses.  :func:`fit_clock` then fits the clock
+with the parameters (a last least-squares unknown: its shift in sample spacings), from
+that phase and from a sample either way where the first fit is not at the record's
+noise, and again from the phase found at the fitted values (an effect included) when
+that is a sample away; :func:`clock_fitted` gives the start state with the fitted clock
+and its interval.  Used by :func:`~pneunet.truth.circuits.fit.fit_trace`.
 """
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
+
+from ...common.errors import PneunetError
+from ..core.lsq import least_squares_log
+from ..core.noise import record_sigma, segments
 
 #: the file's clock is kept unless its rms misfit is more than this factor of the best
 #: phase's: the user's clock stands unless the record contradicts it (a missing effect,
@@ -78,7 +88,6 @@ def source_clock(circuit, data, origin: float) -> tuple[float, str, float]:
     """(netlist time of the first sample, s; a note, '' when the file's clock is kept;
     the sources' common period, s, 0 when none) for a recording ``data`` (time_s from 0, p_<node>_kPa columns; the file's first time
     stamp ``origin``) of ``circuit`` (at the parameter guesses) driven by its sources."""
-    from ..core.noise import record_sigma
     from .data import signal_of_column
     from .model import sample_at
 
@@ -148,3 +157,107 @@ def source_clock(circuit, data, origin: float) -> tuple[float, str, float]:
             f"the record (the sources repeat every {period:g} s; give a time offset to set "
             f"it)")
     return offset, note, period
+
+
+#: the name under which a clock estimated from the record is fitted with the parameters
+CLOCK = "t0@clock"
+
+
+def clock_unit(state, times) -> float:
+    """s per unit of the clock's fitted shift (the sample spacing) when ``state``'s
+    clock was estimated from the record, else 0: the phase a grid found at the
+    parameter guesses is off by as much as the guesses move the sources' response (a
+    pull-up 15 % off: most of a sample, where a 400 kPa edge within one sample turns
+    that into a misfit of tens of kPa), so it is fitted with the parameters."""
+    if not state.clock or not state.clock_period or len(times) < 2:
+        return 0.0
+    return float(np.median(np.diff(times)))
+
+
+#: most sample spacings a start of the clock's fit is moved from the phase found
+CLOCK_STARTS = 3
+#: a fit from the phase found whose rms is within this factor of the record's own noise
+#: needs no other start
+CLOCK_AT_NOISE = 2.0
+
+
+def _clock_starts(res, fun, x0, lb, ub, **lsq):
+    """``res`` (the fit from the clock's phase found at the guesses) when it is at the
+    record's noise, else the best of it and fits from that clock moved by one sample
+    spacing either way, then further in the better direction while that improves (at
+    most :data:`CLOCK_STARTS`): the cost is a narrow valley in the clock and the
+    parameters together, and from the phase found at the guesses LM may not find it (the
+    inverter chain's own-clock recording: 18 kPa rms from the phase found, 0.30 from one
+    sample earlier)."""
+    def cost(r):
+        return float(r.fun @ r.fun)
+
+    noise = [record_sigma(fun.measured[s], segments(fun.keep[s])) / fun.scales[s]
+             for s in fun.signals]
+    noise = math.sqrt(np.nanmean(np.square(noise))) if np.isfinite(noise).any() else math.nan
+    if math.sqrt(cost(res) / max(len(res.fun), 1)) <= CLOCK_AT_NOISE * noise:
+        return res
+
+    def moved(k):
+        x = x0.copy()
+        x[-1] = float(np.clip(x0[-1] + k, lb[-1], ub[-1]))
+        return least_squares_log(fun, x, lb, ub, **lsq)
+
+    used = res.nfev
+    tried = {0: res}
+    for k in (-1, 1):
+        tried[k] = moved(k)
+        used += tried[k].nfev
+    step = -1 if cost(tried[-1]) <= cost(tried[1]) else 1
+    k = step
+    while abs(k) < CLOCK_STARTS and cost(tried[k]) < cost(tried[k - step]):
+        k += step
+        tried[k] = moved(k)
+        used += tried[k].nfev
+    best = min(tried.values(), key=cost)
+    return replace(best, nfev=used)
+
+
+def fit_clock(res, fun, x0, lb, ub, model, df, state, starts: bool, **lsq):
+    """``res`` (a fit with the clock, from ``x0``) or a better one: with ``starts`` (a
+    first fit, its phase found at the guesses) from other starts of the clock
+    (:func:`_clock_starts`); then from the phase the record shows for the circuit at the
+    fitted values, effects included, when that is more than a sample away (a control-line
+    tube delays one valve: at the base model's values the phase found absorbs that delay,
+    21 samples of the driven amplifier's, too far for LM to undo).  The simulations of
+    every fit tried are counted."""
+    if starts:
+        res = _clock_starts(res, fun, x0, lb, ub, **lsq)
+    values = dict(zip(fun.names, np.exp(res.x[:-1])))
+    moved = _clock_refound(model.with_state(state), values, df, state, fun.clock_step)
+    if moved is None:
+        return res
+    x1 = res.x.copy()
+    x1[-1] = float(np.clip(moved, lb[-1], ub[-1]))
+    again = _clock_starts(least_squares_log(fun, x1, lb, ub, **lsq), fun, x1, lb, ub, **lsq)
+    best = again if float(again.fun @ again.fun) < float(res.fun @ res.fun) else res
+    return replace(best, nfev=res.nfev + again.nfev)
+
+
+def _clock_refound(model, values, df, state, step) -> float | None:
+    """The clock's shift (sample spacings of ``step`` s from ``state``'s) at the phase the
+    record shows for ``model`` at ``values`` (:func:`~pneunet.truth.circuits.clock.
+    source_clock`), None when within a sample of ``state``'s or not found."""
+    try:
+        offset, note, period = source_clock(model.circuit(values), df,
+                                            float(df.attrs.get("time_origin", 0.0)))
+    except PneunetError:
+        return None
+    if not note or not period:
+        return None
+    apart = (offset - state.first_time + 0.5 * period) % period - 0.5 * period
+    return apart / step if abs(apart) > step else None
+
+
+def clock_fitted(state, shift, ci, step):
+    """``state`` with the fitted clock: moved by ``shift`` sample spacings of ``step`` s,
+    the first sample's netlist time and its interval (``ci``: the interval of exp(shift))."""
+    moved = replace(state, time_offset=state.time_offset + float(shift) * step)
+    lo, hi = (moved.first_time + (math.log(c) - float(shift)) * step if c > 0 else -math.inf
+              for c in ci)
+    return replace(moved, clock_ci=(lo, hi))

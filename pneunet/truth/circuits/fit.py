@@ -25,6 +25,7 @@ from ..core.intervals import intervals
 from ..core.lsq import least_squares_log
 from ..core.noise import record_sigma, segments
 from .align import Alignment
+from .clock import CLOCK, clock_fitted, clock_unit, fit_clock
 from .data import compared_samples, read_trace, signal_of_column, signal_unit, swings
 from .initial_state import StartState, choose_start
 from .model import DIFF_STEP, FIT_OPTIONS, TraceModel, TraceResidual, sample_at
@@ -193,7 +194,7 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
     estimates); ``time_offset``: netlist time of the first sample (s; default: the
     file's first time stamp for a driven circuit, else 0; where the record shows the
     file's clock misplaces periodic sources, the phase it shows, then fitted with the
-    parameters: :func:`_clock_step`, :func:`_clock_starts`).
+    parameters: :func:`~pneunet.truth.circuits.clock.fit_clock`).
 
     Two stages: with ``features`` and an oscillating record at ``node``, starting
     values from the cycle (:mod:`pneunet.truth.circuits.start`); then Levenberg–Marquardt on
@@ -241,7 +242,7 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
     settle_until = settling_time(state, times, meas.get(f"p_{node}"))
     if settle_until > 0:  # states the record cannot give settle before they are compared
         keep_all = {s: k & (times >= settle_until) for s, k in keep_all.items()}
-    clock_step = _clock_step(state, times)
+    clock_step = clock_unit(state, times)
     fun = TraceResidual(model, names, t_fit, sigs, {s: meas[s][mask] for s in sigs},
                         {s: keep_all[s][mask] for s in sigs}, scales, aligned, clock_step)
     stage1 = None
@@ -263,16 +264,16 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
     calls0 = model.calls
     res = least_squares_log(fun, x0, lb, ub, max_nfev=max_nfev, diff_step=diff_step, pool=pool)
     if clock_step:
-        res = _clock_fits(res, fun, x0, lb, ub, model, df, state,
-                          not isinstance(start_state, StartState), max_nfev=max_nfev,
-                          diff_step=diff_step, pool=pool)
+        res = fit_clock(res, fun, x0, lb, ub, model, df, state,
+                        not isinstance(start_state, StartState), max_nfev=max_nfev,
+                        diff_step=diff_step, pool=pool)
     est = dict(zip(names, np.exp(res.x[:len(names)])))
     groups = np.concatenate([np.full(int(fun.keep[s].sum()), i) for i, s in enumerate(sigs)])
     ci, se, info = intervals(res.x, res.jac, res.fun, names + [CLOCK] * bool(clock_step),
                              groups=groups, confidence=confidence)
     jac = res.jac
     if clock_step:
-        state = _clock_fitted(state, res.x[-1], ci.pop(CLOCK), clock_step)
+        state = clock_fitted(state, res.x[-1], ci.pop(CLOCK), clock_step)
         se.pop(CLOCK)
         model, jac = model.with_state(state), jac[:, :len(names)]
     bounded = at_bounds(names, res.x[:len(names)], lb, ub)
@@ -326,118 +327,6 @@ def compared_masks(model: TraceModel, values: dict, measured: dict) -> dict:
     stored = set(CircuitDAE(circuit).stored_pressure_nodes)
     return {s: np.ones(len(y), bool) if s.startswith("p_") and s[2:] in stored
             else compared_samples(y) for s, y in measured.items()}
-
-
-#: the name under which a clock estimated from the record is fitted with the parameters
-CLOCK = "t0@clock"
-
-
-def _clock_step(state, times) -> float:
-    """s per unit of the clock's fitted shift (the sample spacing) when ``state``'s
-    clock was estimated from the record, else 0: the phase a grid found at the
-    parameter guesses is off by as much as the guesses move the sources' response (a
-    pull-up 15 % off: most of a sample, where a 400 kPa edge within one sample turns
-    that into a misfit of tens of kPa), so it is fitted with the parameters."""
-    if not state.clock or not state.clock_period or len(times) < 2:
-        return 0.0
-    return float(np.median(np.diff(times)))
-
-
-#: most sample spacings a start of the clock's fit is moved from the phase found
-CLOCK_STARTS = 3
-#: a fit from the phase found whose rms is within this factor of the record's own noise
-#: needs no other start
-CLOCK_AT_NOISE = 2.0
-
-
-def _clock_starts(res, fun, x0, lb, ub, **lsq):
-    """``res`` (the fit from the clock's phase found at the guesses) when it is at the
-    record's noise, else the best of it and fits from that clock moved by one sample
-    spacing either way, then further in the better direction while that improves (at
-    most :data:`CLOCK_STARTS`): the cost is a narrow valley in the clock and the
-    parameters together, and from the phase found at the guesses LM may not find it (the
-    inverter chain's own-clock recording: 18 kPa rms from the phase found, 0.30 from one
-    sample earlier)."""
-    from dataclasses import replace
-
-    def cost(r):
-        return float(r.fun @ r.fun)
-
-    noise = [record_sigma(fun.measured[s], segments(fun.keep[s])) / fun.scales[s]
-             for s in fun.signals]
-    noise = math.sqrt(np.nanmean(np.square(noise))) if np.isfinite(noise).any() else math.nan
-    if math.sqrt(cost(res) / max(len(res.fun), 1)) <= CLOCK_AT_NOISE * noise:
-        return res
-
-    def moved(k):
-        x = x0.copy()
-        x[-1] = float(np.clip(x0[-1] + k, lb[-1], ub[-1]))
-        return least_squares_log(fun, x, lb, ub, **lsq)
-
-    used = res.nfev
-    tried = {0: res}
-    for k in (-1, 1):
-        tried[k] = moved(k)
-        used += tried[k].nfev
-    step = -1 if cost(tried[-1]) <= cost(tried[1]) else 1
-    k = step
-    while abs(k) < CLOCK_STARTS and cost(tried[k]) < cost(tried[k - step]):
-        k += step
-        tried[k] = moved(k)
-        used += tried[k].nfev
-    best = min(tried.values(), key=cost)
-    return replace(best, nfev=used)
-
-
-def _clock_fits(res, fun, x0, lb, ub, model, df, state, starts: bool, **lsq):
-    """``res`` (a fit with the clock, from ``x0``) or a better one: with ``starts`` (a
-    first fit, its phase found at the guesses) from other starts of the clock
-    (:func:`_clock_starts`); then from the phase the record shows for the circuit at the
-    fitted values, effects included, when that is more than a sample away (a control-line
-    tube delays one valve: at the base model's values the phase found absorbs that delay,
-    21 samples of the driven amplifier's, too far for LM to undo).  The simulations of
-    every fit tried are counted."""
-    from dataclasses import replace
-
-    if starts:
-        res = _clock_starts(res, fun, x0, lb, ub, **lsq)
-    values = dict(zip(fun.names, np.exp(res.x[:-1])))
-    moved = _clock_refound(model.with_state(state), values, df, state, fun.clock_step)
-    if moved is None:
-        return res
-    x1 = res.x.copy()
-    x1[-1] = float(np.clip(moved, lb[-1], ub[-1]))
-    again = _clock_starts(least_squares_log(fun, x1, lb, ub, **lsq), fun, x1, lb, ub, **lsq)
-    best = again if float(again.fun @ again.fun) < float(res.fun @ res.fun) else res
-    return replace(best, nfev=res.nfev + again.nfev)
-
-
-def _clock_refound(model, values, df, state, step) -> float | None:
-    """The clock's shift (sample spacings of ``step`` s from ``state``'s) at the phase the
-    record shows for ``model`` at ``values`` (:func:`~pneunet.truth.circuits.clock.
-    source_clock`), None when within a sample of ``state``'s or not found."""
-    from .clock import source_clock
-
-    try:
-        offset, note, period = source_clock(model.circuit(values), df,
-                                            float(df.attrs.get("time_origin", 0.0)))
-    except PneunetError:
-        return None
-    if not note or not period:
-        return None
-    apart = (offset - state.first_time + 0.5 * period) % period - 0.5 * period
-    return apart / step if abs(apart) > step else None
-
-
-def _clock_fitted(state, shift, ci, step):
-    """``state`` with the fitted clock: moved by ``shift`` sample spacings of ``step`` s,
-    the first sample's netlist time and its interval (``ci``: the interval of exp(shift))."""
-    from dataclasses import replace
-
-    moved = replace(state, time_offset=state.time_offset + float(shift) * step)
-    lo, hi = (moved.first_time + (math.log(c) - float(shift)) * step if c > 0 else -math.inf
-              for c in ci)
-    return replace(moved, clock_ci=(lo, hi))
 
 
 #: a fitted value this close to a bound of its range (in ln value: 1 %) stopped there
