@@ -151,6 +151,8 @@ def main(argv=None) -> None:
     ap.add_argument("--mid-run", action="store_true", help="oscillator logger started mid-run")
     ap.add_argument("--driven", action="store_true", help="the driven amplifier's cases")
     ap.add_argument("--inverter", action="store_true", help="the inverter chain's cases")
+    ap.add_argument("--own-clock", action="store_true",
+                    help="driven cases: the logger's own clock (time_s from 0), not the sources'")
     args = ap.parse_args(argv)
 
     from pneunet.truth.circuits import diagnose_trace
@@ -168,6 +170,9 @@ def main(argv=None) -> None:
         else:
             rec, build, params, node, expected, start = oscillator_case(name, args.seed,
                                                                         args.mid_run)
+        if args.own_clock:
+            rec = rec.copy()
+            rec["time_s"] = float(np.median(np.diff(rec["time_s"]))) * np.arange(len(rec))
         t0 = time.perf_counter()
         d = diagnose_trace(build, rec, params, node=node)
         wall = time.perf_counter() - t0
@@ -179,8 +184,17 @@ def main(argv=None) -> None:
               + ", ".join(f"{d.timing.get(k, 0):.0f}" for k in ("base_fit_s", "screen_s",
                                                                   "candidate_fits_s"))
               + f") | {d.timing.get('simulations', 0) + d.timing.get('screen_simulations', 0)} |"
-              + (f" {covered(d, inverter_truth(name))} |" if args.inverter else ""),
+              + (f" {covered(d, inverter_truth(name))} |" if args.inverter else "")
+              + (f" first sample {_phase(d, start, args.inverter)} |" if args.own_clock else ""),
               flush=True)
+
+
+def _phase(d, start, inverter) -> str:
+    """How far the first sample's netlist time lies from the logger's true start, in ms
+    modulo the sources' period."""
+    period = 4.0 if inverter else 10.0
+    apart = (d.final.start_state.first_time - start) % period
+    return f"{min(apart, period - apart) * 1e3:.2g} ms off"
 
 
 if __name__ == "__main__":
