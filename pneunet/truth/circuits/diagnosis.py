@@ -304,6 +304,8 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
         # the steps' floor ratios may have changed with the floor: decide once more
         verdict, accepted = decide(steps, floor, tolerance)
         final = fits[" + ".join(accepted)] if accepted else base
+        if not final.success:
+            notes.append(f"{' + '.join(accepted) or 'base model'}: {final.unconverged()}")
         if final is not base and "undetermined_note" in final.extras["intervals"]:
             notes.append(f"{' + '.join(accepted)}: {final.extras['intervals']['undetermined_note']}")
         where_txt = [] if verdict != "unexplained" else locate(final, test, floor, df, node)
