@@ -185,17 +185,16 @@ def main(argv=None) -> None:
                                                                   "candidate_fits_s"))
               + f") | {d.timing.get('simulations', 0) + d.timing.get('screen_simulations', 0)} |"
               + (f" {covered(d, inverter_truth(name))} |" if args.inverter else "")
-              + (f" first sample {_phase(d, start, args.inverter)} |" if args.own_clock else ""),
+              + (f" first sample {_phase(d, start, build)} |" if args.own_clock else ""),
               flush=True)
 
 
-def _phase(d, start, inverter) -> str:
+def _phase(d, start, build) -> str:
     """How far the first sample's netlist time lies from the logger's true start, in ms
-    modulo the sources' period."""
-    period = 4.0 if inverter else 10.0
+    modulo the period of the netlist's sources."""
+    from pneunet.truth.circuits.clock import common_period, varying_waveforms
+
+    circuit = build({})
+    period = common_period(varying_waveforms(circuit, start, start + 100.0))
     apart = (d.final.start_state.first_time - start) % period
     return f"{min(apart, period - apart) * 1e3:.2g} ms off"
-
-
-if __name__ == "__main__":
-    main()

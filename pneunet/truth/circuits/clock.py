@@ -86,8 +86,9 @@ def varying_waveforms(circuit, t0: float, t1: float) -> list:
 
 def source_clock(circuit, data, origin: float) -> tuple[float, str, float]:
     """(netlist time of the first sample, s; a note, '' when the file's clock is kept;
-    the sources' common period, s, 0 when none) for a recording ``data`` (time_s from 0, p_<node>_kPa columns; the file's first time
-    stamp ``origin``) of ``circuit`` (at the parameter guesses) driven by its sources."""
+    the sources' common period, s, 0 when none) for a recording ``data`` (time_s from
+    0, p_<node>_kPa columns; the file's first time stamp ``origin``) of ``circuit`` (at
+    the parameter guesses) driven by its sources."""
     from .data import signal_of_column
     from .model import sample_at
 
@@ -181,6 +182,11 @@ CLOCK_STARTS = 3
 CLOCK_AT_NOISE = 2.0
 
 
+def _cost(res) -> float:
+    """Sum of squares of a least-squares result's residual."""
+    return float(res.fun @ res.fun)
+
+
 def _clock_starts(res, fun, x0, lb, ub, **lsq):
     """``res`` (the fit from the clock's phase found at the guesses) when it is at the
     record's noise, else the best of it and fits from that clock moved by one sample
@@ -189,13 +195,10 @@ def _clock_starts(res, fun, x0, lb, ub, **lsq):
     parameters together, and from the phase found at the guesses LM may not find it (the
     inverter chain's own-clock recording: 18 kPa rms from the phase found, 0.30 from one
     sample earlier)."""
-    def cost(r):
-        return float(r.fun @ r.fun)
-
     noise = [record_sigma(fun.measured[s], segments(fun.keep[s])) / fun.scales[s]
              for s in fun.signals]
     noise = math.sqrt(np.nanmean(np.square(noise))) if np.isfinite(noise).any() else math.nan
-    if math.sqrt(cost(res) / max(len(res.fun), 1)) <= CLOCK_AT_NOISE * noise:
+    if math.sqrt(_cost(res) / max(len(res.fun), 1)) <= CLOCK_AT_NOISE * noise:
         return res
 
     def moved(k):
@@ -208,13 +211,13 @@ def _clock_starts(res, fun, x0, lb, ub, **lsq):
     for k in (-1, 1):
         tried[k] = moved(k)
         used += tried[k].nfev
-    step = -1 if cost(tried[-1]) <= cost(tried[1]) else 1
+    step = -1 if _cost(tried[-1]) <= _cost(tried[1]) else 1
     k = step
-    while abs(k) < CLOCK_STARTS and cost(tried[k]) < cost(tried[k - step]):
+    while abs(k) < CLOCK_STARTS and _cost(tried[k]) < _cost(tried[k - step]):
         k += step
         tried[k] = moved(k)
         used += tried[k].nfev
-    best = min(tried.values(), key=cost)
+    best = min(tried.values(), key=_cost)
     return replace(best, nfev=used)
 
 
@@ -235,7 +238,7 @@ def fit_clock(res, fun, x0, lb, ub, model, df, state, starts: bool, **lsq):
     x1 = res.x.copy()
     x1[-1] = float(np.clip(moved, lb[-1], ub[-1]))
     again = _clock_starts(least_squares_log(fun, x1, lb, ub, **lsq), fun, x1, lb, ub, **lsq)
-    best = again if float(again.fun @ again.fun) < float(res.fun @ res.fun) else res
+    best = again if _cost(again) < _cost(res) else res
     return replace(best, nfev=res.nfev + again.nfev)
 
 
