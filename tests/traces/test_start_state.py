@@ -201,3 +201,20 @@ def test_unrecorded_storage_is_fitted_from_a_recorded_junction():
     assert fit.start_state.mode == "record" and list(fit.start_state.fitted) == ["p0@muscle"]
     truth = {"Rtube.R": 0.24, "Amck.V": 30.0, "p0@muscle": float(clean["p_muscle_kPa"][0])}
     assert all(_covers(fit, truth).values()), (fit.values, fit.ci, truth)
+
+
+@pytest.mark.xfail(strict=True, reason="a record that starts 0.3 s after the inverter "
+                   "chain's first switching: the start state read from its first samples "
+                   "biases the fit, whose intervals then miss R_pull (found 2026-11-27; "
+                   "not fixed)")
+def test_a_record_starting_just_after_a_switching_covers_the_truth():
+    """The inverter chain recorded from 1.3 s on the sources' clock (its first PULSE edge
+    is at 1.0–1.05 s), 25 Hz, 0.5 kPa: R_pull [22.44, 22.54] for a true 23 (at 50 Hz
+    [23.11, 23.20]); from 5.4 s or 6.7 s the same fit covers it."""
+    from .standalone_inverter import inverter_record
+
+    rec = inverter_record(1.3, 8.0, dt=0.04, noise=0.5, seed=3, Rpull=23.0)
+    fit = fit_trace(NetlistBuilder("netlists/inverter.pn"), rec,
+                    {"Rpull": (20.0, 2.0, 200.0), "X1.Vout.V": (2.5, 0.2, 20.0),
+                     "X2.Vout.V": (2.5, 0.2, 20.0)}, node="out1")
+    assert fit.ci["Rpull"][0] <= 23.0 <= fit.ci["Rpull"][1], fit.ci["Rpull"]
