@@ -197,7 +197,8 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
     pressure signal); ``window`` = (t0, t1) the fitted samples; ``effects``: circuit
     effects added (their parameters may appear in ``params``); ``options``: simulator
     options (default :data:`~pneunet.truth.circuits.model.FIT_OPTIONS`); ``max_nfev``: cap on
-    the simulations of the least-squares stage (Jacobian included); ``pool``: an
+    the simulations of the least-squares stage (Jacobian included), raised in proportion
+    for the start state's fitted initial pressures; ``pool``: an
     executor for the Jacobian's columns; ``x_start``: starting values (skips the
     cycle stage); ``align``: compare an oscillating record cycle by cycle, each
     simulated cycle started at its own crossing (:mod:`pneunet.truth.circuits.align`), for a
@@ -276,6 +277,9 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
         half = 0.5 * state.clock_period / clock_step
         x0, lb, ub = np.append(x0, 0.0), np.append(lb, -half), np.append(ub, half)
     calls0 = model.calls
+    # each initial pressure fitted costs a Jacobian column per step: it adds its share
+    own = len(names) - sum(k in state.fitted for k in names)
+    max_nfev = math.ceil(max_nfev * len(names) / max(own, 1))
     res = least_squares_log(fun, x0, lb, ub, max_nfev=max_nfev, diff_step=diff_step, pool=pool)
     if clock_step:
         res = fit_clock(res, fun, x0, lb, ub, model, df, state,

@@ -9,11 +9,12 @@ state compares a start-up transient with a settled recording.  Three start state
   time t0 > 0, the rest state at switch-on (or a record's length before t0, whichever is
   later) driven by its sources up to t0, so that states the record does not hold (a
   control line's pressure, a gas temperature) carry their history;
-* ``record``: the state read from the recording — every recorded storage node at the
-  pressure its first samples extrapolate to at t = 0 (a parabola through them), a
-  recorded algebraic node's value picks its branch (a valve open or closed), an
-  unrecorded one's branch is the one whose first samples match the record, and every
-  unrecorded storage node's initial pressure is fitted with the rest (``p0@NODE``);
+* ``record``: the state read from the recording — every storage node's initial
+  pressure fitted with the parameters (``p0@NODE``), a recorded one from the pressure
+  its first samples extrapolate to at t = 0 (a parabola through them), an unrecorded
+  one from what the recorded algebraic nodes imply; a recorded algebraic node's value
+  picks its branch (a valve open or closed), an unrecorded one's branch is the one
+  whose first samples match the record;
   the elements' own states (a muscle's contraction and velocity, a balloon's volume)
   at rest for those pressures (:func:`element_states`), then moved to match their
   recorded signals (a muscle's encoder);
@@ -54,7 +55,7 @@ IMPLIED_TOLERANCE_KPA = 5.0
 IMPLIED_TOLERANCE = 0.05
 #: full recorded cycles simulated before the record in the ``settled`` start
 SETTLE_CYCLES = 4
-#: prefix of the fitted initial pressure of an unrecorded storage node
+#: prefix of a storage node's fitted initial pressure
 P0_PREFIX = "p0@"
 
 
@@ -322,8 +323,11 @@ def _start_at(model, values: dict, data, mode: str, time_offset: float | None,
                           driven=driven, reason=reason)
     pressures = {n: v for n, (v, _) in recorded.items() if n in storage}
     guesses = {n: v for n, (v, _) in recorded.items() if n in algebraic}
-    fitted = {f"{P0_PREFIX}{n}": (float(np.clip(implied.get(n, rest[n]), lo, hi)), lo, hi)
-              for n in storage if n not in pressures}
+    # every storage node's initial pressure is fitted: an unrecorded one from the
+    # pressure the recorded algebraic nodes imply, a recorded one from its first samples
+    # (fixed there, their noise and a transient's curvature would bias the parameters)
+    fitted = {f"{P0_PREFIX}{n}": (float(np.clip(pressures.get(n, implied.get(n, rest[n])),
+                                                lo, hi)), lo, hi) for n in storage}
     if mode == "auto":
         first = ", ".join(f"{n} {v:.4g} kPa against {rest[n]:.4g}"
                           for n, v in list(off_rest.items())[:3])

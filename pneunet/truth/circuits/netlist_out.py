@@ -443,9 +443,9 @@ def _tail(model, deck, target, appended, times, owned, values) -> list[str]:
 def _ic_comment(model) -> str:
     state = model.state
     if state is not None and state.mode == "record":
-        return ("start state read from the recording (record mode): recorded storage at its "
-                "first samples, a branch's guess, fitted initial pressures; storage an "
-                "effect adds starts at its node's pressure")
+        return ("start state read from the recording (record mode): storage at its fitted "
+                "initial pressures, a branch's guess; storage an effect adds starts at its "
+                "node's pressure")
     return "storage an effect adds starts at the settled pressure of its node"
 
 
