@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Callable
 
 import numpy as np
@@ -27,7 +27,7 @@ from ..core.noise import record_sigma, segments
 from .align import Alignment
 from .clock import CLOCK, clock_fitted, clock_unit, fit_clock
 from .data import compared_samples, read_trace, signal_of_column, signal_unit, swings
-from .initial_state import StartState, choose_start
+from .initial_state import P0_PREFIX, StartState, choose_start
 from .model import DIFF_STEP, FIT_OPTIONS, TraceModel, TraceResidual, sample_at
 
 
@@ -238,9 +238,16 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
             raise ParameterError(f"fit parameter {k}: need 0 < low ≤ guess ≤ high, got {params[k]}")
     model = TraceModel(build, fixed, effects, start, FIT_OPTIONS if options is None else options)
     guess = {k: v[0] for k, v in params.items()}
+    if isinstance(start_state, StartState):  # its fitted p0@NODE are not netlist parameters
+        model = model.with_state(start_state)
     check_signals(model, guess, cols, where)
     state = start_state if isinstance(start_state, StartState) else choose_start(
         model, guess, df, start_state, time_offset, where)
+    node = node or next((s[2:] for s in sigs if s.startswith("p_")), None)
+    settle_until = settling_time(state, times, meas.get(f"p_{node}"))
+    if settle_until > 0:  # a recorded node's first value is not compared: not fitted
+        state = replace(state, fitted={k: v for k, v in state.fitted.items()
+                                       if f"p_{k[len(P0_PREFIX):]}" not in meas})
     model = model.with_state(state)
     params = {**params, **{k: v for k, v in state.fitted.items() if k not in params}}
     names = list(params)
@@ -250,11 +257,9 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
     keep_all = compared_masks(model, guess, meas)
     unit, scales = residual_scales(meas, keep_all)
     t_fit = times[mask]
-    node = node or next((s[2:] for s in sigs if s.startswith("p_")), None)
     aligned = None
     if align and not state.driven and node and f"p_{node}" in meas:
         aligned = Alignment.of(times, meas[f"p_{node}"], f"p_{node}")
-    settle_until = settling_time(state, times, meas.get(f"p_{node}"))
     if settle_until > 0:  # states the record cannot give settle before they are compared
         keep_all = {s: k & (times >= settle_until) for s, k in keep_all.items()}
     clock_step = clock_unit(state, times)
