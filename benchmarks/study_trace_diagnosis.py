@@ -198,3 +198,7 @@ def _phase(d, start, build) -> str:
     period = common_period(varying_waveforms(circuit, start, start + 100.0))
     apart = (d.final.start_state.first_time - start) % period
     return f"{min(apart, period - apart) * 1e3:.2g} ms off"
+
+
+if __name__ == "__main__":
+    main()
