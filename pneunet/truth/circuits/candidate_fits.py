@@ -11,7 +11,7 @@ import math
 import numpy as np
 
 from ...common.errors import SolverError
-from ..core.verdict import Step, at_floor
+from ..core.verdict import Step, at_floor, indistinguishable
 from .data import compared_samples, signal_of_column
 from .fit import TraceFit, fit_trace, near_bound
 from .screen import SCREEN_KEEP, screen_candidates, step_starts
@@ -273,3 +273,27 @@ def at_bound(fit: TraceFit) -> str:
             if near_bound(fit.values[k], lo, hi):
                 return f"{k} = {fit.values[k]:.4g}"
     return ""
+
+
+def parsimonious_first(fitted: list, fits: dict, test) -> tuple[list, str]:
+    """``fitted`` (candidate names by held-out error, best first) with the candidate of
+    fewest parameters among those whose held-out residuals the best's cannot be told
+    from (:func:`~pneunet.truth.core.verdict.indistinguishable`) moved first, and a note
+    naming the others ('' when the best stays first alone): a tube of small resistance at a
+    valve's output and a dead volume at that node fit a recording alike, and the
+    recording cannot choose between them."""
+    if len(fitted) < 2:
+        return fitted, ""
+    best = fits[fitted[0]].scaled_residuals(test)
+    alike = [fitted[0]] + [n for n in fitted[1:]
+                           if indistinguishable(fits[n].scaled_residuals(test), best)]
+    if len(alike) < 2:
+        return fitted, ""
+    size = {n: sum(len(e.params) for e in fits[n].effects) for n in alike}
+    first = min(alike, key=lambda n: (size[n], alike.index(n)))
+    others = [n for n in alike if n != first]
+    note = (f"{first} and {', '.join(others)} fit the held-out record alike (held out "
+            + ", ".join(f"{fits[n].error(test):.4g}" for n in [first] + others)
+            + f"): the recording cannot tell them apart; {first} is taken, with the fewest "
+            "parameters")
+    return [first] + [n for n in fitted if n != first], note

@@ -27,8 +27,8 @@ from ..core.locate import best_lag, hot_phases, phase_profile
 from ..core.noise import ROUNDING_SIGMA, difference_sigma, resolution, segments
 from ..core.verdict import TOLERANCE, Step, at_floor, decide
 from ..core.waterfall import Waterfall
-from .candidate_fits import (CandidateFits, at_bound, base_refit, fit_pairs,
-                             fit_screened, second_effects, screen_data,
+from .candidate_fits import (CandidateFits, at_bound, base_refit, fit_pairs, fit_screened,
+                             parsimonious_first, second_effects, screen_data,
                              single_refit_from_pair, unfitted_row)
 from .data import read_trace, signal_of_column, signal_unit, split_by_cycles
 from .effects import candidates_for
@@ -271,6 +271,9 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
             fit_screened(rows, fits, fitting, screen, 4 * max_nfev, say)
             timing["candidate_fits_s"] = time.perf_counter() - t0
             fitted = sorted((n for n in fits if n != "none"), key=lambda n: fits[n].error(test))
+            fitted, alike = parsimonious_first(fitted, fits, test)
+            if alike:
+                notes.append(alike)
             ranking += [_row(n, fits[n], test, floor, fitting.starts.get(n))
                         for n in fitted]
             ranking += [unfitted_row(r, fitting.failed, n_res) for r in rows

@@ -90,10 +90,13 @@ class TraceFit(Summarized):
     def error(self, window=None) -> float:
         """Pooled rms of the scaled residuals (in ``unit``) on the compared samples in
         ``window`` (default: the fit window)."""
+        return _rms(self.scaled_residuals(window))
+
+    def scaled_residuals(self, window=None) -> np.ndarray:
+        """The residuals of :meth:`error`, signal after signal (NaN where not compared)."""
         sel = self._in(window)
-        parts = [self.residuals[s].to_numpy()[sel] / self.scales.get(s, 1.0)
-                 for s in self.signals()]
-        return _rms(np.concatenate(parts))
+        return np.concatenate([self.residuals[s].to_numpy()[sel] / self.scales.get(s, 1.0)
+                               for s in self.signals()])
 
     def errors_by_signal(self, window=None) -> dict:
         """{signal: rms residual in the signal's own unit} on the compared samples in

@@ -11,6 +11,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+import numpy as np
+
 VERDICTS = ("adequate", "explained", "unexplained")
 
 #: held-out error within this factor of the noise floor counts as "at the floor"
@@ -64,6 +66,32 @@ def decide(steps: list[Step], floor: float, tolerance: float = TOLERANCE) -> tup
                          if at_floor(s.held_out, floor, tolerance)), [])
     final = next((s.held_out for s in steps if list(s.effects) == accepted), steps[0].held_out)
     return verdict(steps[0].held_out, final, floor, accepted, tolerance=tolerance), accepted
+
+
+#: rms residuals closer than this fraction fit alike whatever their standard error: a
+#: difference far below the verdict's tolerance decides nothing
+ALIKE_FRACTION = 0.01
+
+
+def indistinguishable(a, b, sigmas: float = 2.0) -> bool:
+    """Whether two models' residuals ``a`` and ``b`` (the same samples, NaN where one is
+    not compared) fit alike: their rms within :data:`ALIKE_FRACTION` of each other, or
+    the mean of a² − b² within ``sigmas`` standard errors of zero, the standard error by
+    Newey–West (statsmodels' HAC) over √n lags, because a recording's residuals are
+    autocorrelated over many samples."""
+    import statsmodels.api as sm
+
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    ok = np.isfinite(a) & np.isfinite(b)
+    if ok.sum() < 10:
+        return False
+    ms_a, ms_b = float(np.mean(a[ok] ** 2)), float(np.mean(b[ok] ** 2))
+    if abs(math.sqrt(ms_a) - math.sqrt(ms_b)) <= ALIKE_FRACTION * math.sqrt(min(ms_a, ms_b)):
+        return True
+    d = a[ok] ** 2 - b[ok] ** 2
+    lags = int(math.sqrt(d.size))
+    fit = sm.OLS(d, np.ones(d.size)).fit(cov_type="HAC", cov_kwds={"maxlags": lags})
+    return bool(abs(fit.params[0]) <= sigmas * fit.bse[0])
 
 
 def _num(v):
