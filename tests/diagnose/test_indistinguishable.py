@@ -71,10 +71,25 @@ def test_the_candidate_with_fewer_parameters_goes_first_when_they_fit_alike():
     noise = rng.standard_normal(N)
     fits = {"tube": _fit(noise, 2), "dead_volume": _fit(noise * 1.0001, 1),
             "leak": _fit(noise + 0.5, 1)}
-    order, note = parsimonious_first(["tube", "dead_volume", "leak"], fits, None)
+    order, note = parsimonious_first(["tube", "dead_volume", "leak"], fits, None, 1.0, 1.5)
     assert order == ["dead_volume", "tube", "leak"]
     assert "dead_volume and tube fit the held-out record alike" in note
     # told apart: the best stays first and nothing is said
     fits["dead_volume"] = _fit(noise + 0.3, 1)
-    assert parsimonious_first(["tube", "dead_volume", "leak"], fits, None) == (
+    assert parsimonious_first(["tube", "dead_volume", "leak"], fits, None, 1.0, 1.5) == (
         ["tube", "dead_volume", "leak"], "")
+
+
+def test_a_simpler_candidate_across_the_verdicts_threshold_is_not_taken():
+    """The best just at the floor (1.495×), a one-parameter candidate 0.7 % worse and
+    just above it (1.505×): alike by the rms, but taking it would turn `explained` into
+    `unexplained`."""
+    rng = np.random.default_rng(5)
+    noise = rng.standard_normal(N)
+    noise *= 1.495 / np.sqrt(np.mean(noise ** 2))
+    fits = {"tube": _fit(noise, 2), "dead_volume": _fit(noise * (1.505 / 1.495), 1)}
+    assert parsimonious_first(["tube", "dead_volume"], fits, None, 1.0, 1.5) == (
+        ["tube", "dead_volume"], "")
+    fits["dead_volume"] = _fit(noise * (1.4951 / 1.495), 1)
+    assert parsimonious_first(["tube", "dead_volume"], fits, None, 1.0, 1.5)[0] == [
+        "dead_volume", "tube"]

@@ -275,18 +275,22 @@ def at_bound(fit: TraceFit) -> str:
     return ""
 
 
-def parsimonious_first(fitted: list, fits: dict, test) -> tuple[list, str]:
+def parsimonious_first(fitted: list, fits: dict, test, floor: float,
+                       tolerance: float) -> tuple[list, str]:
     """``fitted`` (candidate names by held-out error, best first) with the candidate of
     fewest parameters among those whose held-out residuals the best's cannot be told
-    from (:func:`~pneunet.truth.core.verdict.indistinguishable`) moved first, and a note
-    naming the others ('' when the best stays first alone): a tube of small resistance at a
-    valve's output and a dead volume at that node fit a recording alike, and the
-    recording cannot choose between them."""
+    from (:func:`~pneunet.truth.core.verdict.indistinguishable`) and that are on the
+    best's side of the verdict's threshold (``tolerance`` × ``floor``) moved first, and a
+    note naming the others ('' when the best stays first alone): a tube of small
+    resistance at a valve's output and a dead volume at that node fit a recording alike,
+    and the recording cannot choose between them."""
     if len(fitted) < 2:
         return fitted, ""
     best = fits[fitted[0]].scaled_residuals(test)
+    side = at_floor(fits[fitted[0]].error(test), floor, tolerance)
     alike = [fitted[0]] + [n for n in fitted[1:]
-                           if indistinguishable(fits[n].scaled_residuals(test), best)]
+                           if at_floor(fits[n].error(test), floor, tolerance) == side
+                           and indistinguishable(fits[n].scaled_residuals(test), best)]
     if len(alike) < 2:
         return fitted, ""
     size = {n: sum(len(e.params) for e in fits[n].effects) for n in alike}

@@ -271,7 +271,7 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
             fit_screened(rows, fits, fitting, screen, 4 * max_nfev, say)
             timing["candidate_fits_s"] = time.perf_counter() - t0
             fitted = sorted((n for n in fits if n != "none"), key=lambda n: fits[n].error(test))
-            fitted, alike = parsimonious_first(fitted, fits, test)
+            fitted, alike = parsimonious_first(fitted, fits, test, floor, tolerance)
             if alike:
                 notes.append(alike)
             ranking += [_row(n, fits[n], test, floor, fitting.starts.get(n))
