@@ -54,7 +54,9 @@ def least_squares_log(fun, x0, lb, ub, *, max_nfev: int = 40, diff_step: float =
     LM knows no bounds: a step past one is clipped, and LM starts again (at most
     :data:`RESTARTS` times) with that parameter held at its bound and the others free.
     ``max_nfev`` caps the simulations, Jacobian columns included; no point is simulated
-    twice.  The Jacobian returned has a column for every parameter.
+    twice.  MINPACK caps its calls assuming a Jacobian at each; where it stops on that
+    cap with simulations left, LM goes on from its point with them.  The Jacobian
+    returned has a column for every parameter.
 
     LM's trust region is a ball in ln x (every parameter relative to its value): it
     starts at radius :data:`FIRST_RADIUS`, and LM stops when it falls below ``xtol``
@@ -95,7 +97,8 @@ def least_squares_log(fun, x0, lb, ub, *, max_nfev: int = 40, diff_step: float =
 
     x = np.clip(np.asarray(x0, float), lb, ub)
     free = np.ones(len(x), bool)
-    for _ in range(1 + RESTARTS):
+    restarts = 0
+    while True:
         idx = np.flatnonzero(free)
 
         def at(z, base=x.copy(), idx=idx):
@@ -103,7 +106,7 @@ def least_squares_log(fun, x0, lb, ub, *, max_nfev: int = 40, diff_step: float =
             full[idx] = np.clip(z, lb[idx], ub[idx])
             return full
 
-        left = max_nfev - count["n"]
+        left = used = max_nfev - count["n"]
         shift = xtol / (_MINPACK_XTOL * math.sqrt(idx.size))
         u0 = x[idx] + shift
         u, _, _, message, status = optimize.leastsq(
@@ -121,6 +124,11 @@ def least_squares_log(fun, x0, lb, ub, *, max_nfev: int = 40, diff_step: float =
         g = jacobian(x, range(len(x))).T @ f(x)
         release = np.flatnonzero(~free & (((x >= ub) & (g > 0)) | ((x <= lb) & (g < 0))))
         if not hold.size and not release.size:
+            if status == 5 and max_nfev - count["n"] < used:
+                continue  # LM's call cap (a Jacobian per call assumed) left simulations
+            break
+        restarts += 1
+        if restarts > RESTARTS:
             break
         free[hold], free[release] = False, True
         if not free.any():
