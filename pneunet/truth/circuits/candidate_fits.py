@@ -1,8 +1,9 @@
 """The full fits of a circuit diagnosis' candidate effects, after the screen
 (:mod:`pneunet.truth.circuits.screen`): the most promising singles from their screen
 points, more where the screen cannot tell them apart, second starts, a second effect
-on top of the best single, and the parsimony refits (the best single again from a
-pair's values, the base model again from the best model's values).  Used by
+on top of the best single, and parsimony (of singles that fit alike, the one with
+fewest parameters; the best single again from a pair's values, the base model again
+from the best model's values).  Used by
 :func:`~pneunet.truth.circuits.diagnosis.diagnose_trace`."""
 from __future__ import annotations
 
