@@ -229,3 +229,21 @@ def test_a_record_starting_just_after_a_switching_covers_the_truth(dt, noise, se
     assert all(_covers(fit, truth).values()), (fit.values, fit.ci, truth)
     lo, hi = fit.ci["p0@out2"]
     assert abs(fit.values["p0@out2"] - float(clean["p_out2_kPa"][0])) <= hi - lo
+
+
+def test_a_fit_given_a_start_state_fits_its_pressures_as_the_diagnosis_does():
+    """A diagnosis fits every candidate with the base fit's start state and its fitted
+    ``p0@NODE`` among the parameters.  Those fits checked the recorded columns on a model
+    without that state and read ``p0@muscle`` as a netlist parameter: 'parameter
+    'p0@muscle' is not defined by a .param line', every candidate failed."""
+    rec = amplifier_record(5.12, 20.0, dt=0.02, noise=0.3, seed=2, R_line=0.24, V=30.0)
+    params = {"Rtube.R": (0.2, 0.02, 2.0), "Amck.V": (25.0, 5.0, 200.0)}
+    base = fit_trace(NetlistBuilder(AMPLIFIER), rec[["time_s", "p_act_kPa"]], params,
+                     node="act")
+    state = base.start_state
+    assert list(state.fitted) == ["p0@muscle"]
+    again = fit_trace(NetlistBuilder(AMPLIFIER), rec[["time_s", "p_act_kPa"]],
+                      {**params, **state.fitted}, node="act", start_state=state,
+                      x_start=base.values)
+    for k, v in base.values.items():
+        assert again.values[k] == pytest.approx(v, rel=1e-3), k
