@@ -106,7 +106,7 @@ def least_squares_log(fun, x0, lb, ub, *, max_nfev: int = 40, diff_step: float =
             full[idx] = np.clip(z, lb[idx], ub[idx])
             return full
 
-        left = used = max_nfev - count["n"]
+        left = max_nfev - count["n"]
         shift = xtol / (_MINPACK_XTOL * math.sqrt(idx.size))
         u0 = x[idx] + shift
         u, _, _, message, status = optimize.leastsq(
@@ -124,7 +124,7 @@ def least_squares_log(fun, x0, lb, ub, *, max_nfev: int = 40, diff_step: float =
         g = jacobian(x, range(len(x))).T @ f(x)
         release = np.flatnonzero(~free & (((x >= ub) & (g > 0)) | ((x <= lb) & (g < 0))))
         if not hold.size and not release.size:
-            if status == 5 and max_nfev - count["n"] < used:
+            if status == 5 and max_nfev - count["n"] < left:
                 continue  # LM's call cap (a Jacobian per call assumed) left simulations
             break
         restarts += 1
