@@ -1,10 +1,12 @@
 """Which screened candidates a diagnosis fits fully (candidate_fits.fit_screened): the
 best two (a third within SCREEN_KEEP), then — when none reaches the floor — the next
 ones the screen cannot tell from the best, in its order, until one does, then second
-starts for the first round; a candidate the screen shows clearly worse is never fitted."""
+starts for the first round and for later ones that stayed in the base fit's valley, then
+the best fit continued where its budget stopped it; a candidate the screen shows clearly
+worse is never fitted."""
 from types import SimpleNamespace
 
-from pneunet.truth.circuits.candidate_fits import fit_screened
+from pneunet.truth.circuits.candidate_fits import STAYED, fit_screened
 from pneunet.truth.circuits.screen import SCREEN_KEEP
 
 FLOOR = 1.0
@@ -15,14 +17,21 @@ class Fitting:
 
     pool, test = None, (0.0, 1.0)
 
-    def __init__(self, held_out):
+    def __init__(self, held_out, base=10.0, stopped=()):
         self.held_out, self.calls, self.failed = held_out, [], {}
+        self.base = SimpleNamespace(error=lambda window=None: base)
+        self.stopped = set(stopped)  # candidates whose fits stop on their budget
 
     def start(self, eff, x_start, max_nfev):
-        second = x_start.get("second", False)
-        self.calls.append((eff.name, "second" if second else "first"))
-        err = self.held_out[eff.name] * (0.5 if second else 1.0)
-        return SimpleNamespace(error=lambda window=None: err)
+        """A second start halves a candidate's held-out error, and so does each
+        continuation (a start from a fit's own values)."""
+        kind = "continued" if "from" in x_start else \
+            "second" if x_start.get("second", False) else "first"
+        self.calls.append((eff.name, kind))
+        err = x_start.get("err", self.held_out[eff.name]) * (1.0 if kind == "first" else 0.5)
+        return SimpleNamespace(error=lambda window=None: err, effects=(eff,),
+                               success=eff.name not in self.stopped,
+                               values={"from": eff.name, "err": err})
 
     def base_start(self, guesses=False):
         return {"second": True}
@@ -49,7 +58,7 @@ def test_one_the_screen_shows_clearly_worse_is_never_fitted():
     screened = rows(1.0, 1.05, 1.1, SCREEN_KEEP * 1.01)
     fitting = Fitting({"e0": 9, "e1": 9, "e2": 9, "e3": 0.5})
     fit_screened(screened, {}, fitting, 3, 160, lambda m: None)
-    # second starts for the first round only, best first; e3 never
+    # second starts for the first round only (none later), best first; e3 never
     assert fitting.calls == [("e0", "first"), ("e1", "first"), ("e2", "first"),
                              ("e0", "second"), ("e1", "second"), ("e2", "second")]
 
@@ -59,3 +68,31 @@ def test_a_first_round_at_the_floor_stops_there():
     fitting = Fitting({"e0": 0.9, "e1": 9, "e2": 9})
     fit_screened(screened, {}, fitting, 3, 160, lambda m: None)
     assert fitting.calls == [("e0", "first"), ("e1", "first"), ("e2", "first")]
+
+
+def test_a_later_candidate_that_stayed_in_the_base_valley_gets_a_second_start():
+    """e3 and e4 are fitted after the first round; e3's fit ends where the base fit's did
+    (it tested nothing), e4's left that valley: only e3 is started again."""
+    screened = rows(1.0, 1.05, 1.1, 1.2, 1.3)
+    fitting = Fitting({"e0": 9, "e1": 9, "e2": 9, "e3": STAYED * 10.0, "e4": 6.0})
+    fit_screened(screened, {}, fitting, 3, 160, lambda m: None)
+    assert fitting.calls[5:] == [("e0", "second"), ("e1", "second"), ("e2", "second"),
+                                 ("e3", "second")]
+
+
+def test_the_best_fit_stopped_on_its_budget_is_continued_until_it_reaches_the_floor():
+    """e2's second start reaches 2.4 (above the floor's 1.5) on its budget: it goes on
+    from there (1.2, at the floor); e0, better than the base but converged, is not."""
+    screened = rows(1.0, 1.05, 1.1)
+    fitting = Fitting({"e0": 6, "e1": 9, "e2": 4.8}, stopped={"e2"})
+    fits = {}
+    fit_screened(screened, fits, fitting, 3, 160, lambda m: None)
+    assert fitting.calls[-1] == ("e2", "continued") and fits["e2"].error() == 1.2
+    assert fitting.calls.count(("e2", "continued")) == 1
+
+
+def test_a_converged_best_fit_is_not_continued():
+    screened = rows(1.0, 1.05, 1.1)
+    fitting = Fitting({"e0": 6, "e1": 9, "e2": 4.8})
+    fit_screened(screened, {}, fitting, 3, 160, lambda m: None)
+    assert ("e2", "continued") not in fitting.calls
