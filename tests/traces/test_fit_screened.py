@@ -6,7 +6,7 @@ the best fit continued where its budget stopped it; a candidate the screen shows
 worse is never fitted."""
 from types import SimpleNamespace
 
-from pneunet.truth.circuits.candidate_fits import STAYED, fit_screened
+from pneunet.truth.circuits.candidate_fits import CONTINUATIONS, STAYED, fit_screened
 from pneunet.truth.circuits.screen import SCREEN_KEEP
 
 FLOOR = 1.0
@@ -80,15 +80,27 @@ def test_a_later_candidate_that_stayed_in_the_base_valley_gets_a_second_start():
                                  ("e3", "second")]
 
 
-def test_the_best_fit_stopped_on_its_budget_is_continued_until_it_reaches_the_floor():
+def test_the_best_fit_stopped_on_its_budget_is_continued():
     """e2's second start reaches 2.4 (above the floor's 1.5) on its budget: it goes on
-    from there (1.2, at the floor); e0, better than the base but converged, is not."""
+    from there, and on again while its budget stops it (1.2, then 0.6: the verdict and
+    the intervals are not taken where a budget stopped it); e0, better than the base but
+    converged, is not continued."""
     screened = rows(1.0, 1.05, 1.1)
     fitting = Fitting({"e0": 6, "e1": 9, "e2": 4.8}, stopped={"e2"})
     fits = {}
     fit_screened(screened, fits, fitting, 3, 160, lambda m: None)
-    assert fitting.calls[-1] == ("e2", "continued") and fits["e2"].error() == 1.2
-    assert fitting.calls.count(("e2", "continued")) == 1
+    assert fitting.calls[-2:] == [("e2", "continued")] * 2 and fits["e2"].error() == 0.6
+    assert fitting.calls.count(("e2", "continued")) == CONTINUATIONS == 2
+    assert ("e0", "continued") not in fitting.calls
+
+
+def test_a_first_round_fit_at_the_floor_stopped_on_its_budget_is_continued():
+    screened = rows(1.0, 1.05, 1.1)
+    fitting = Fitting({"e0": 1.2, "e1": 9, "e2": 9}, stopped={"e0"})
+    fits = {}
+    fit_screened(screened, fits, fitting, 3, 160, lambda m: None)
+    assert fitting.calls == [("e0", "first"), ("e1", "first"), ("e2", "first"),
+                             ("e0", "continued"), ("e0", "continued")]
 
 
 def test_a_converged_best_fit_is_not_continued():

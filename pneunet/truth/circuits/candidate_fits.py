@@ -108,8 +108,15 @@ def fit_screened(rows, fits, fitting, screen, max_nfev, say) -> None:
             break
         step_starts([row], fitting.pool)
         _fit_row(row, fits, fitting, max_nfev, say)
-    if fitting.reached(fits):
-        return
+    if not fitting.reached(fits):
+        _second_starts(rows, close, fits, fitting, max_nfev, say)
+    continue_stopped(fits, fitting, max_nfev, say)
+
+
+def _second_starts(rows, close, fits, fitting, max_nfev, say) -> None:
+    """A second start (every base parameter at the user's guess) for each of the first
+    round ``close``, and for each later fitted row whose fit stayed in the base fit's
+    valley (:data:`STAYED`), in the screen's order, until one reaches the floor."""
     base = fitting.base.error(fitting.test)
     stayed = [r for r in rows[len(close):] if r["effect"].name in fits
               and fits[r["effect"].name].error(fitting.test) >= STAYED * base]
@@ -126,7 +133,6 @@ def fit_screened(rows, fits, fitting, screen, max_nfev, say) -> None:
             fitting.failed.pop(eff.name, None)
         if fitting.reached(fits):
             break
-    continue_stopped(fits, fitting, max_nfev, say)
 
 
 #: a candidate whose fit from its screen point ends with a held-out error at least this
@@ -138,15 +144,13 @@ CONTINUATIONS = 2
 
 
 def continue_stopped(fits, fitting, max_nfev, say) -> None:
-    """When no candidate reaches the floor: the best fitted one, if its fit stopped on its
-    budget while improving on the base model, continued from where it stopped (at most
-    :data:`CONTINUATIONS` times, while that lowers its held-out error).  A tube whose R
-    and V trade along R·V needs 300 simulations from its second start: the verdict must
-    not be decided on where a budget stopped it."""
+    """The best fitted candidate, if its fit stopped on its budget while improving on the
+    base model, continued from where it stopped (at most :data:`CONTINUATIONS` times,
+    while that lowers its cost on the fit window): neither the verdict nor the intervals
+    are decided where a budget stopped a fit.  A tube whose R and V trade along R·V needs
+    about 300 simulations from its second start, twice its budget."""
     test = fitting.test
     for _ in range(CONTINUATIONS):
-        if fitting.reached(fits):
-            return
         name = min((n for n in fits if n != "none"), key=lambda n: fits[n].error(test),
                    default=None)
         if name is None or fits[name].success \
@@ -155,7 +159,7 @@ def continue_stopped(fits, fitting, max_nfev, say) -> None:
         last = fits[name]
         say(f"fitting {name} on from where its budget stopped it")
         again = fitting.start(last.effects[0], dict(last.values), max_nfev)
-        if again is None or again.error(test) >= last.error(test):
+        if again is None or again.error() >= last.error():
             return
         fits[name] = again
 
