@@ -20,11 +20,12 @@ PARAMS = {"Rpull": (20.0, 2.0, 200.0), "X1.Vout.V": (2.5, 0.2, 20.0),
 TRUTH = {"Rpull": 23.0, "X1.Vout.V": 2.0, "X2.Vout.V": 2.0}
 
 
-def diagnose(**hidden):
+def diagnose(effects=None, **hidden):
     start = float(np.random.default_rng([1, 9]).uniform(0.0, 8.0))  # 5.44 s
     rec = inverter_record(start, 20.0, dt=0.02, noise=0.3, seed=1, Rpull=TRUTH["Rpull"],
                           **hidden)
-    return diagnose_trace(NetlistBuilder("netlists/inverter.pn"), rec, PARAMS, node="out1")
+    return diagnose_trace(NetlistBuilder("netlists/inverter.pn"), rec, PARAMS, node="out1",
+                          effects=effects)
 
 
 def covers(d, truth):
@@ -72,3 +73,20 @@ def test_heat_exchange_in_out1s_volume_is_named_and_covered():
     assert d.verdict == "explained" and d.accepted == ["volume_heat_transfer@X1.Vout"], \
         d.report()
     assert all(covers(d, {**TRUTH, "tau@X1.Vout": 0.5}).values()), d.report()
+
+
+@pytest.mark.study
+def test_a_tube_the_screen_ranks_last_is_named_from_its_second_start():
+    """The control-line tube among four other tubes (-m study: ~1 min; the whole library
+    is the study_long test above): every candidate fitted from its screen point stays in
+    the bent base fit's valley; the tube, screened last, is fitted again from the user's
+    guesses, continued where its budget stops it, and named with intervals covering."""
+    others = ["tube@X2.Xv.in", "tube@X1.Xv.ctrl", "tube@X1.Vout.node", "tube@X2.Vout.node"]
+    d = diagnose(tube_ctrl=(20.0, 1.0), effects=others + ["tube@X2.Xv.ctrl"])
+    assert d.verdict == "explained" and d.accepted == ["tube@X2.Xv.ctrl"], d.report()
+    starts = next(r["starts"] for r in d.ranking if r["effect"] == "tube@X2.Xv.ctrl")
+    # from its screen point, from the guesses, on from where the budget stopped it
+    assert len(starts) >= 3 and starts[0]["held_out_rms"] > 10 * starts[-1]["held_out_rms"], \
+        starts
+    truth = {**TRUTH, "R_tube@X2.Xv.ctrl": 20.0, "V_tube@X2.Xv.ctrl": 1.0}
+    assert all(covers(d, truth).values()), (covers(d, truth), d.report())
