@@ -115,3 +115,25 @@ def test_a_dead_volume_that_a_tube_fits_alike_is_named_with_its_fewer_parameters
     assert any("cannot tell them apart" in n for n in d.notes), d.notes
     lo, hi = d.final.ci["V_dead@act"]
     assert lo <= 6.0 <= hi
+
+
+@pytest.mark.study_long
+@pytest.mark.xfail(strict=True, raises=AssertionError, reason=(
+    "found 2026-11-27 rerunning the mid-run table (right, 7.83 → 1.33, on 2026-11-26): "
+    "from its screen point (τ 0.22, the truth's in pneunet's τ) volume_heat_transfer's fit "
+    "ends at V 57 mL, R_vent 2.6 (truth 50, 3.0), 3.77 kPa held out, and from the guesses "
+    "LM stops within 30 simulations on its step tolerance far off; from the truth it "
+    "reaches the floor (0.53 kPa). 7e55854 named polytropic + heat, this tree "
+    "unexplained"))
+def test_oscillator_heat_exchange_recorded_mid_run_is_named():
+    """The oscillator's tank with an energy balance (constant hA, τ 0.5 s at 200 kPa),
+    the logger started 4.9 s after switch-on (``study_trace_diagnosis.py --mid-run``)."""
+    from pneunet.design.circuits import oscillator
+
+    start = float(np.random.default_rng([1, 7]).uniform(2.0, 10.0))
+    rec = oscillator_record(12.0 + start, noise=0.4, seed=1, heat_tau=0.5)
+    rec = rec[rec["time_s"] >= start - 1e-9].reset_index(drop=True)
+    rec["time_s"] -= rec["time_s"].iloc[0]
+    params = {"Rout": (1.4, 0.3, 5.0), "Rvent": (3.8, 0.5, 20.0), "V": (65.0, 5.0, 500.0)}
+    d = diagnose_trace(oscillator, rec, params, node="tank")
+    assert d.verdict == "explained" and d.accepted == ["volume_heat_transfer"], d.report()
