@@ -24,8 +24,8 @@ class Fitting:
     def __init__(self, refit):
         self.refit, self.started = refit, []
 
-    def start(self, eff, x_start, max_nfev):
-        self.started.append((eff, dict(x_start), max_nfev))
+    def start(self, eff, x_start, max_nfev, kind):
+        self.started.append((eff, dict(x_start), max_nfev, kind))
         return self.refit
 
 
@@ -44,7 +44,7 @@ def test_a_base_fit_in_a_wrong_valley_is_replaced_and_the_effect_not_needed():
     notes = []
     assert base_refit(fits, steps, fitting, 120, notes, print)
     # started from the best model's base values only (not its effect's), the base budget
-    assert fitting.started == [(None, {"Rpull": 23.0, "V": 3.5}, 120)]
+    assert fitting.started == [(None, {"Rpull": 23.0, "V": 3.5}, 120, "tube@X1.in's values")]
     assert fits["none"] is fitting.refit and steps[0].held_out == 0.30
     assert decide(steps, 0.3) == ("adequate", [])
     assert "5 → 0.3 kPa" in notes[0]

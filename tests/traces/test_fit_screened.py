@@ -22,19 +22,20 @@ class Fitting:
         self.base = SimpleNamespace(error=lambda window=None: base)
         self.stopped = set(stopped)  # candidates whose fits stop on their budget
 
-    def start(self, eff, x_start, max_nfev):
+    def start(self, eff, x_start, max_nfev, kind):
         """A second start halves a candidate's held-out error, and so does each
         continuation (a start from a fit's own values)."""
-        kind = "continued" if "from" in x_start else \
-            "second" if x_start.get("second", False) else "first"
+        kind = {"screen point": "first", "second start": "second"}.get(kind, kind)
+        assert kind != "continued" or x_start.get("from") == eff.name
         self.calls.append((eff.name, kind))
         err = x_start.get("err", self.held_out[eff.name]) * (1.0 if kind == "first" else 0.5)
+        stopped = eff.name in self.stopped
         return SimpleNamespace(error=lambda window=None: err, effects=(eff,),
-                               success=eff.name not in self.stopped,
+                               stopped_on_budget=lambda: stopped,
                                values={"from": eff.name, "err": err})
 
     def base_start(self, guesses=False):
-        return {"second": True}
+        return {}
 
     def reached(self, fits):
         return any(f.error() <= 1.5 * FLOOR for n, f in fits.items() if n != "none")

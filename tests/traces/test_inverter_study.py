@@ -86,7 +86,7 @@ def test_a_tube_the_screen_ranks_last_is_named_from_its_second_start():
     assert d.verdict == "explained" and d.accepted == ["tube@X2.Xv.ctrl"], d.report()
     starts = next(r["starts"] for r in d.ranking if r["effect"] == "tube@X2.Xv.ctrl")
     # from its screen point, from the guesses, on from where the budget stopped it
-    assert len(starts) >= 3 and starts[0]["held_out_rms"] > 10 * starts[-1]["held_out_rms"], \
-        starts
+    assert [s["kind"] for s in starts][:3] == ["screen point", "second start", "continued"]
+    assert starts[0]["held_out_rms"] > 10 * starts[-1]["held_out_rms"], starts
     truth = {**TRUTH, "R_tube@X2.Xv.ctrl": 20.0, "V_tube@X2.Xv.ctrl": 1.0}
     assert all(covers(d, truth).values()), (covers(d, truth), d.report())

@@ -60,10 +60,11 @@ class CandidateFits:
         return any(at_floor(f.error(self.test), self.floor, self.tolerance)
                    for n, f in fits.items() if n != "none")
 
-    def start(self, eff, x_start, max_nfev) -> TraceFit | None:
+    def start(self, eff, x_start, max_nfev, kind: str) -> TraceFit | None:
         """The fit of ``eff`` (None: the base model) from ``x_start`` (its parameters;
         the base ones from the base fit's or the screen's); None (and why in ``failed``)
-        when it fails.  Every start is listed in ``starts``."""
+        when it fails.  Every start is listed in ``starts``, with ``kind`` (where it
+        started: 'screen point', 'second start', 'continued', …)."""
         name = "none" if eff is None else eff.name
         try:
             fit = self._fit(() if eff is None else (eff,), x_start, max_nfev)
@@ -71,8 +72,10 @@ class CandidateFits:
             self.failed.setdefault(name, f"fit failed: {err}")
             return None
         self.starts.setdefault(name, []).append(
-            {"start": {k: float(x_start[k]) for k in (eff or self).params if k in x_start},
-             "held_out_rms": fit.error(self.test), "simulations": fit.extras.get("simulations")})
+            {"kind": kind,
+             "start": {k: float(x_start[k]) for k in (eff or self).params if k in x_start},
+             "held_out_rms": fit.error(self.test), "simulations": fit.extras.get("simulations"),
+             "converged": fit.success})
         return fit
 
     def pair(self, effects, x_start, max_nfev, notes) -> TraceFit | None:
@@ -126,7 +129,8 @@ def _second_starts(rows, close, fits, fitting, max_nfev, say) -> None:
             continue
         say(f"fitting {eff.name} from a second start")
         second = {k: _second_start(v, row["x"].get(k)) for k, v in eff.params.items()}
-        fit = fitting.start(eff, {**fitting.base_start(guesses=True), **second}, max_nfev)
+        fit = fitting.start(eff, {**fitting.base_start(guesses=True), **second}, max_nfev,
+                            "second start")
         if fit is not None and (eff.name not in fits or fit.error(fitting.test)
                                 < fits[eff.name].error(fitting.test)):
             fits[eff.name] = fit
@@ -153,12 +157,12 @@ def continue_stopped(fits, fitting, max_nfev, say) -> None:
     for _ in range(CONTINUATIONS):
         name = min((n for n in fits if n != "none"), key=lambda n: fits[n].error(test),
                    default=None)
-        if name is None or fits[name].success \
+        if name is None or not fits[name].stopped_on_budget() \
                 or fits[name].error(test) >= fitting.base.error(test):
             return
         last = fits[name]
         say(f"fitting {name} on from where its budget stopped it")
-        again = fitting.start(last.effects[0], dict(last.values), max_nfev)
+        again = fitting.start(last.effects[0], dict(last.values), max_nfev, "continued")
         if again is None or again.error() >= last.error():
             return
         fits[name] = again
@@ -172,7 +176,7 @@ def _fit_row(row, fits, fitting, max_nfev, say) -> None:
                                     "point of its parameter range")
         return
     say(f"fitting {eff.name}")
-    fit = fitting.start(eff, row["x"], max_nfev)
+    fit = fitting.start(eff, row["x"], max_nfev, "screen point")
     if fit is not None:
         fits[eff.name] = fit
 
@@ -238,7 +242,7 @@ def single_refit_from_pair(fits, best, steps, fitting, max_nfev, say) -> bool:
     drop = pair.effects[1].params
     say(f"fitting {best} again from the pair's values")
     again = fitting.start(pair.effects[0], {k: v for k, v in pair.values.items()
-                                            if k not in drop}, max_nfev)
+                                            if k not in drop}, max_nfev, "the pair's values")
     if again is None or again.error(test) >= fits[best].error(test):
         return False
     fits[best] = again
@@ -258,7 +262,8 @@ def base_refit(fits, steps, fitting, max_nfev, notes, say) -> bool:
     name = " + ".join(steps[-1].effects)
     best = fits[name]
     say(f"fitting the base model again from {name}'s values")
-    again = fitting.start(None, {k: best.values[k] for k in fitting.params}, max_nfev)
+    again = fitting.start(None, {k: best.values[k] for k in fitting.params}, max_nfev,
+                          f"{name}'s values")
     if again is None or again.error(fitting.test) >= steps[0].held_out:
         return False
     notes.append(f"base model fitted again from {name}'s values: held-out error "

@@ -151,14 +151,18 @@ class TraceFit(Summarized):
             lines.append(f"warning: {self.unconverged()}")
         return "\n".join(lines)
 
+    def stopped_on_budget(self) -> bool:
+        """Whether the fit stopped on its simulation budget before converging."""
+        return not self.success and ("maxfev" in self.message
+                                     or "calls to function" in self.message)
+
     def unconverged(self) -> str:
         """Why the estimates are not at an optimum ('' when the fit converged): a fit
         stopped on its simulation budget reports where it stopped, and its intervals
         are not confidence intervals of the best fit."""
         if self.success:
             return ""
-        why = ("on its budget" if "maxfev" in self.message or "calls to function"
-               in self.message else f"({self.message})")
+        why = "on its budget" if self.stopped_on_budget() else f"({self.message})"
         return (f"the fit stopped {why} after {self.nfev} simulations, before converging: "
                 "the estimates and intervals are where it stopped, not at the best fit; "
                 "raise --max-nfev (max_nfev) or start nearer")
