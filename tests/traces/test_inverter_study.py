@@ -1,7 +1,8 @@
 """The trace diagnosis on a third circuit, never studied before: the two-inverter chain of
 ``netlists/inverter.pn`` (``python -m pytest -m study_long``; the clean case takes ~5 s,
-the control-line tube ~3 min on 2 cores; ``benchmarks/study_trace_diagnosis.py
---inverter`` runs every case for its table).
+the control-line tube ~5 min on 2 cores; ``-m study`` the tube among four other tubes,
+~2 min; ``benchmarks/study_trace_diagnosis.py --inverter`` runs every case for its
+table).
 
 Stand-alone recordings (:mod:`.standalone_inverter`): R_pull 23 kPa·s/mg (the netlist
 says 20), p_out1 and p_out2 at 50 Hz for 20 s from a random time on the sources' clock,
@@ -77,7 +78,7 @@ def test_heat_exchange_in_out1s_volume_is_named_and_covered():
 
 @pytest.mark.study
 def test_a_tube_the_screen_ranks_last_is_named_from_its_second_start():
-    """The control-line tube among four other tubes (-m study: ~1 min; the whole library
+    """The control-line tube among four other tubes (-m study: ~2 min; the whole library
     is the study_long test above): every candidate fitted from its screen point stays in
     the bent base fit's valley; the tube, screened last, is fitted again from the user's
     guesses, continued where its budget stops it, and named with intervals covering."""
