@@ -123,8 +123,10 @@ def test_a_dead_volume_that_a_tube_fits_alike_is_named_with_its_fewer_parameters
     "from its screen point (τ 0.22, the truth's in pneunet's τ) volume_heat_transfer's fit "
     "ends at V 57 mL, R_vent 2.6 (truth 50, 3.0), 3.77 kPa held out, and from the guesses "
     "LM stops within 30 simulations on its step tolerance far off; from the truth it "
-    "reaches the floor (0.53 kPa). 7e55854 named polytropic + heat, this tree "
-    "unexplained"))
+    "reaches the floor (0.53 kPa). R_out is the trap: from the base fit's values with R_out "
+    "alone at the truth (1.132 for the base's 1.006) the fit reaches the floor, from the "
+    "truth with R_out alone at the base's it does not; no fit moves R_out. 7e55854 named "
+    "polytropic + heat, this tree unexplained"))
 def test_oscillator_heat_exchange_recorded_mid_run_is_named():
     """The oscillator's tank with an energy balance (constant hA, τ 0.5 s at 200 kPa),
     the logger started 4.9 s after switch-on (``study_trace_diagnosis.py --mid-run``)."""
