@@ -108,10 +108,7 @@ def _continuation(residual_jac, y, active, scale, capacitance, tol, max_iter, fl
         if step is None or not np.all(np.isfinite(step)):
             dtau *= 0.1
             continue
-        trial = y.copy()
-        trial[active] += step
-        f_trial = residual_jac(trial, False)[0]
-        norm_trial = np.max(np.abs(f_trial[active]))
+        trial, norm_trial = _ptc_trial(residual_jac, y, active, step, norm)
         if not np.isfinite(norm_trial) or np.any(trial[active] <= 0):
             dtau *= 0.25
             continue
@@ -124,3 +121,28 @@ def _continuation(residual_jac, y, active, scale, capacitance, tol, max_iter, fl
             return NewtonResult(y, True, it + 1, norm)
         f, jac = residual_jac(y, True)
     return NewtonResult(y, False, max_iter, norm)
+
+
+#: halvings of a continuation step tried where the full step does not lower the residual
+PTC_HALVINGS = 4
+
+
+def _ptc_trial(residual_jac, y, active, step, norm):
+    """(trial point, its residual norm) of a continuation ``step`` from ``y``: the full
+    step, or the first of its halves (at most :data:`PTC_HALVINGS`) that lowers the
+    residual below ``norm``; the full step when none does (the relaxation may pass a
+    hump).  Without the halving a root where the flow goes as the square root of a
+    pressure difference (a closed valve's output, its line's quadrature law) is
+    overshot to its mirror point each step: a 2-cycle that never converges."""
+    trial = y.copy()
+    trial[active] += step
+    norm_full = np.max(np.abs(residual_jac(trial, False)[0][active]))
+    if not norm_full >= norm:
+        return trial, norm_full
+    for k in range(1, PTC_HALVINGS + 1):
+        half = y.copy()
+        half[active] += step * 0.5 ** k
+        norm_half = np.max(np.abs(residual_jac(half, False)[0][active]))
+        if norm_half < norm and np.all(half[active] > 0):
+            return half, norm_half
+    return trial, norm_full
