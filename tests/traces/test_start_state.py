@@ -247,3 +247,26 @@ def test_a_fit_given_a_start_state_fits_its_pressures_as_the_diagnosis_does():
                       x_start=base.values)
     for k, v in base.values.items():
         assert again.values[k] == pytest.approx(v, rel=1e-3), k
+
+
+@pytest.mark.parametrize("effect", ["volume_heat_transfer", "polytropic_volume",
+                                    "dead_volume@out"])
+def test_an_effect_model_starts_its_valve_on_the_record_s_branch(effect):
+    """Mid-run, the tank at 315 kPa with the valve open (its output near 453 kPa): a
+    candidate effect must start the circuit where the base model does.  Heat exchange
+    makes the tank a thermal chamber whose lines reach it through inlet nodes; those
+    were started at the pressure across R_out (the valve output's 453 kPa), and the
+    consistent state then closed the valve: the candidate compared a closed valve with
+    the record, and its fit was trapped far from the truth."""
+    from pneunet.truth.circuits.effects import candidates_for
+    from pneunet.truth.circuits.initial_state import StartState
+
+    state = StartState(mode="record", pressures={"tank": 315.4}, guesses={"out": 453.4})
+    base = TraceModel(oscillator, state=state)
+    eff = candidates_for(base.circuit(TRUE), [effect])[0]
+    with_effect = TraceModel(oscillator, effects=(eff,), state=state)
+    guesses = {k: guess for k, (guess, _, _) in eff.params.items()}
+    p_out = [base.simulate(TRUE, 0.02).pressure("out")[0],
+             with_effect.simulate({**TRUE, **guesses}, 0.02).pressure("out")[0]]
+    assert p_out[0] > 440.0  # the open branch
+    assert p_out[1] == pytest.approx(p_out[0], abs=0.5)

@@ -176,18 +176,25 @@ def settled_pressures(circuit, t0: float = 0.0) -> dict:
 
 def start_settled(circuit, settled, old_nodes) -> None:
     """Start the storage that effects or ``.options dead_volume`` put on algebraic nodes
-    where the circuit had those nodes (``.ic``), and a new node that a resistance joins
-    to such a node (a tube's inner node) at that node's pressure: a recording starts
-    from a settled state, not from a volume at the ambient pressure."""
+    where the circuit had those nodes (``.ic``), and a new node at the pressure of the
+    node it joins: a link's line node (a thermal chamber's inlet) at its chamber's, else
+    a resistance's (a tube's inner node) at the node across it.  A recording starts from
+    a settled state, not from a volume at the ambient pressure; an inlet node started
+    at the pressure across its line (a valve's output) started the chamber's valve on
+    its other branch."""
+    from ...physics import elements
+
     settled, algebraic = settled
     for node in algebraic:
         circuit.initial.setdefault(node, settled[node])
-    for spec in circuit.elements.values():
-        if spec.kind in ("resistor", "pipe") and len(spec.nodes) == 2:
-            a, b = spec.nodes
-            for new, old in ((a, b), (b, a)):
-                if new not in old_nodes and old in settled:
-                    circuit.initial.setdefault(new, settled[old])
+    joins = [spec.nodes for spec in circuit.elements.values()
+             if spec.kind in ("resistor", "pipe") and len(spec.nodes) == 2]
+    links = [tuple(spec.nodes[k] for k in elements.family(spec.kind).link_ports)
+             for spec in circuit.elements.values() if elements.family(spec.kind).link_ports]
+    for a, b in links + joins:  # a link's node is at its volume's pressure, first
+        for new, old in ((a, b), (b, a)):
+            if new not in old_nodes and old in settled:
+                circuit.initial.setdefault(new, settled[old])
 
 
 #: a simulation may take this many times the median one before it counts as failed
