@@ -117,19 +117,15 @@ def test_a_dead_volume_that_a_tube_fits_alike_is_named_with_its_fewer_parameters
     assert lo <= 6.0 <= hi
 
 
-@pytest.mark.study_long
-@pytest.mark.xfail(strict=True, raises=AssertionError, reason=(
-    "found 2026-11-27 rerunning the mid-run table (right, 7.83 → 1.33, on 2026-11-26): "
-    "from its screen point (τ 0.22, the truth's in pneunet's τ) volume_heat_transfer's fit "
-    "ends at V 57 mL, R_vent 2.6 (truth 50, 3.0), 3.77 kPa held out, and from the guesses "
-    "LM stops within 30 simulations on its step tolerance far off; from the truth it "
-    "reaches the floor (0.53 kPa). R_out is the trap: from the base fit's values with R_out "
-    "alone at the truth (1.132 for the base's 1.006) the fit reaches the floor, from the "
-    "truth with R_out alone at the base's it does not; no fit moves R_out. 7e55854 named "
-    "polytropic + heat, this tree unexplained"))
+@pytest.mark.study
 def test_oscillator_heat_exchange_recorded_mid_run_is_named():
     """The oscillator's tank with an energy balance (constant hA, τ 0.5 s at 200 kPa),
-    the logger started 4.9 s after switch-on (``study_trace_diagnosis.py --mid-run``)."""
+    the logger started 4.9 s after switch-on (``study_trace_diagnosis.py --mid-run``),
+    the tank at 315 kPa and the valve open.  It came out ``unexplained`` (6.47 → 3.65×
+    the floor): heat exchange makes the tank a thermal chamber whose inlet nodes were
+    started at the valve output's pressure, which closed the valve at the first sample,
+    and the consistent state failed at random trial R_out (a continuation 2-cycle around
+    the closed valve's root), so no fit moved R_out from the base's 1.006 (truth 1.132)."""
     from pneunet.design.circuits import oscillator
 
     start = float(np.random.default_rng([1, 7]).uniform(2.0, 10.0))
@@ -139,3 +135,9 @@ def test_oscillator_heat_exchange_recorded_mid_run_is_named():
     params = {"Rout": (1.4, 0.3, 5.0), "Rvent": (3.8, 0.5, 20.0), "V": (65.0, 5.0, 500.0)}
     d = diagnose_trace(oscillator, rec, params, node="tank")
     assert d.verdict == "explained" and d.accepted == ["volume_heat_transfer"], d.report()
+    # held out at 1.2× the floor, not at it (not pinned down: the gas temperature at the
+    # first sample is started at the wall's, not fitted; the stand-alone's valve cavity
+    # is a volume): R_out's interval [1.134, 1.150] just misses 1.132, so the values are
+    # checked within 2 % of the truth, not by their intervals
+    for k, truth in {"Rout": 1.132, "Rvent": 3.0, "V": 50.0}.items():
+        assert d.final.values[k] == pytest.approx(truth, rel=0.02), (k, d.final.ci[k])
