@@ -1,7 +1,7 @@
 """Recordings as a logger makes them, diagnosed whole (issue 31; one to four minutes each).
 CI runs the ``study`` cases (``python -m pytest -m study``): the new user's recording, the
-clean driven one, heat plus a tube at once (both effects named) and the leak (outside the
-library).  The single effects and the compliant actuator are ``study_long``
+oscillator's heat exchange recorded mid-run, the clean driven one, heat plus a tube at once
+(both effects named) and the leak (outside the library).  The single effects and the compliant actuator are ``study_long``
 (``python -m pytest -m study_long``; ``benchmarks/study_trace_diagnosis.py --driven`` runs
 the same cases for its table).
 
