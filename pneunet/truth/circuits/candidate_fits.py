@@ -31,7 +31,7 @@ class CandidateFits:
         self.failed = {}  # effect name -> why it has no fit
         self.starts = {}  # effect name -> [{start values, held-out rms, simulations}]
 
-    def _fit(self, effs, x_start, max_nfev):
+    def _fit(self, effs, x_start, max_nfev, refined=False):
         p = {k: (float(np.clip(self.base.values[k], lo, hi)), lo, hi)
              for k, (_, lo, hi) in self.params.items()}
         for e in effs:
@@ -43,7 +43,7 @@ class CandidateFits:
         return fit_trace(self.build, self.df, p, fixed=self.fixed, node=self.node,
                          window=self.train, effects=effs, max_nfev=max_nfev, pool=self.pool,
                          options=self.options, x_start=x, where=self.where,
-                         start_state=self.state)
+                         start_state=self.state, refined=refined)
 
     def base_start(self, guesses: bool = False) -> dict:
         """Starting values of the base parameters: the base fit's, except where it
@@ -166,6 +166,22 @@ def continue_stopped(fits, fitting, max_nfev, say) -> None:
         if again is None or again.error() >= last.error():
             return
         fits[name] = again
+
+
+def refine_final(fits, name, fitting, max_nfev, notes, say) -> bool:
+    """The reported fit ``fits[name]`` (the accepted effects joined, or 'none') fitted
+    again from its values and refined (:func:`~pneunet.truth.circuits.fit.refine_fit`:
+    finer simulations, stopped within a fraction of its standard errors); True when it
+    replaced the fit.  The other fits, which only rank the candidates, are not refined."""
+    final = fits[name]
+    say(f"refining {name}")
+    try:
+        again = fitting._fit(final.effects, dict(final.values), max_nfev, refined=True)
+    except SolverError as err:
+        notes.append(f"{name}: not refined: {err}")
+        return False
+    fits[name] = again
+    return True
 
 
 def _fit_row(row, fits, fitting, max_nfev, say) -> None:

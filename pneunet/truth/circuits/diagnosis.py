@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -28,7 +28,7 @@ from ..core.noise import ROUNDING_SIGMA, difference_sigma, resolution, segments
 from ..core.verdict import TOLERANCE, Step, at_floor, decide
 from ..core.waterfall import Waterfall
 from .candidate_fits import (CandidateFits, at_bound, base_refit, fit_pairs, fit_screened,
-                             parsimonious_first, second_effects, screen_data,
+                             parsimonious_first, refine_final, second_effects, screen_data,
                              single_refit_from_pair, unfitted_row)
 from .data import read_trace, signal_of_column, signal_unit, split_by_cycles
 from .effects import candidates_for
@@ -234,7 +234,8 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
         t0 = time.perf_counter()
         base = fit_trace(build, df, params, fixed=fixed, node=node, window=train,
                          max_nfev=BASE_BUDGET * max_nfev, pool=pool, options=options,
-                         where=where, start_state=start_state, time_offset=time_offset)
+                         where=where, start_state=start_state, time_offset=time_offset,
+                         refined=False)
         state = base.start_state
         say(f"start: {state.describe()}")
         params = {**params, **{k: v for k, v in state.fitted.items() if k not in params}}
@@ -306,6 +307,16 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
                            for r in ranking]
         # the steps' floor ratios may have changed with the floor: decide once more
         verdict, accepted = decide(steps, floor, tolerance)
+        name = " + ".join(accepted) or "none"
+        if verdict != "unexplained" and refine_final(fits, name, fitting,
+                                                     BASE_BUDGET * max_nfev, notes, say):
+            step = len(steps) - 1 if accepted else 0
+            steps[step] = replace(steps[step], held_out=fits[name].error(test))
+            ranking = [r if r["effect"] != name else
+                       _row(name, fits[name], test, floor, fitting.starts.get(name))
+                       for r in ranking]
+            base = fits["none"]
+            verdict, accepted = decide(steps, floor, tolerance)
         final = fits[" + ".join(accepted)] if accepted else base
         if not final.success:
             notes.append(f"{' + '.join(accepted) or 'base model'}: {final.unconverged()}")

@@ -22,13 +22,14 @@ import numpy as np
 from ...common.errors import DataError, ParameterError, PneunetError
 from ...common.reprs import Summarized, listed, number
 from ..core.intervals import intervals
-from ..core.lsq import least_squares_log
+from ..core.lsq import least_squares_log, refine
 from ..core.noise import record_sigma, segments
 from .align import Alignment
 from .clock import CLOCK, clock_fitted, clock_unit, fit_clock
 from .data import compared_samples, read_trace, signal_of_column, signal_unit, swings
 from .initial_state import P0_PREFIX, StartState, choose_start
-from .model import DIFF_STEP, FIT_OPTIONS, TraceModel, TraceResidual, sample_at
+from .model import (DIFF_STEP, FIT_OPTIONS, REFINE_DIFF_STEP, REFINE_OPTIONS, TraceModel,
+                    TraceResidual, sample_at)
 
 
 @dataclass(repr=False)
@@ -195,7 +196,7 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
               features: bool = True, diff_step: float = DIFF_STEP, options: dict | None = None,
               pool=None, x_start: dict | None = None, where: str | None = None,
               align: bool = True, start_state="auto",
-              time_offset: float | None = None) -> TraceFit:
+              time_offset: float | None = None, refined: bool = True) -> TraceFit:
     """Estimate ``params`` ({name: (guess, low, high)}) so the circuit reproduces ``data``.
 
     ``build(point) -> Circuit`` (or a :class:`~pneunet.netlist.builder.NetlistBuilder`)
@@ -297,6 +298,8 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
         res = fit_clock(res, fun, x0, lb, ub, model, df, state,
                         not isinstance(start_state, StartState), max_nfev=max_nfev,
                         diff_step=diff_step, pool=pool)
+    if refined and res.success:
+        res, fun, model = refine_fit(res, fun, lb, ub, max_nfev, pool)
     est = dict(zip(names, np.exp(res.x[:len(names)])))
     groups = np.concatenate([np.full(int(fun.keep[s].sum()), i) for i, s in enumerate(sigs)])
     ci, se, info = intervals(res.x, res.jac, res.fun, names + [CLOCK] * bool(clock_step),
@@ -341,6 +344,28 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
                      "compared": {s: int(keep_all[s].sum()) for s in sigs},
                      "keep": keep_all,
                      "compared_from_s": settle_until})
+
+
+def refine_fit(res, fun: TraceResidual, lb, ub, max_nfev: int, pool):
+    """(result, residual, model) of a converged fit ``res`` of ``fun`` refined
+    (:func:`~pneunet.truth.core.lsq.refine`: simulated with :data:`~pneunet.truth.circuits.
+    model.REFINE_OPTIONS`, differences of :data:`~pneunet.truth.circuits.model.
+    REFINE_DIFF_STEP`, until its step is a fraction of its smallest standard error), or
+    the fit as it is when its stopping radius was already that fine.  The simulations
+    of both count."""
+    model = fun.model.with_options(REFINE_OPTIONS)
+    finer = replace_model(fun, model)
+    again = refine(finer, res, lb, ub, max_nfev=max_nfev, diff_step=REFINE_DIFF_STEP,
+                   pool=pool)
+    if again is None:
+        return res, fun, fun.model
+    return replace(again, nfev=res.nfev + again.nfev), finer, model
+
+
+def replace_model(fun: TraceResidual, model: TraceModel) -> TraceResidual:
+    """``fun`` simulating ``model`` instead of its own."""
+    return TraceResidual(model, fun.names, fun.times, fun.signals, fun.measured, fun.keep,
+                         fun.scales, fun.align, fun.clock_step)
 
 
 def compared_masks(model: TraceModel, values: dict, measured: dict) -> dict:

@@ -23,13 +23,20 @@ from ...common.errors import PneunetError, SolverError
 #: strongly correlated parameters (a polytropic tank's n and V from a mid-run
 #: recording stop 3.5 standard errors off the optimum; 0.1 % reaches it) while 0.1 %
 #: fails to release a base parameter held at its bound (the driven amplifier's line
-#: resistance with a control-line tube stays at 0.02): neither step serves both yet.
+#: resistance with a control-line tube stays at 0.02): a converged fit is refined from
+#: its point with the shorter step (:data:`REFINE_DIFF_STEP`).
 #: Folds are crossed by explicit jumps: aligned cycle by cycle (:mod:`.align`) they
 #: agree with a stand-alone integration in the dead-volume limit to 0.02 kPa rms; a
 #: 1e-4 mL dead volume instead agrees to 0.006 kPa but makes the finite differences
 #: rough
 FIT_OPTIONS = {"rtol": 1e-6, "atol": 1e-6}
 DIFF_STEP = 5e-3
+#: a converged fit is refined (:func:`~pneunet.truth.core.lsq.refine`) with these
+#: simulator settings and finite-difference step: at rtol 1e-6 the oscillator's cost
+#: along a line 0.25 % long wiggles by ±1 % (±9 in χ²), more than the standard errors
+#: resolve; at 1e-8 by ±0.1 %, for 1.7× the time of a simulation
+REFINE_OPTIONS = {"rtol": 1e-8, "atol": 1e-8}
+REFINE_DIFF_STEP = 1e-3
 #: simulation output points per sample interval where cycles are compared at shifted
 #: times (a shifted cycle interpolated between sample-spaced points misplaces corners)
 OUTPUT_PER_SAMPLE = 5
@@ -57,6 +64,11 @@ class TraceModel:
         """The same model started from ``state``."""
         return TraceModel(self.build, self.fixed, self.effects, self.start, self.options,
                           self.typical_s, state, self.budget)
+
+    def with_options(self, options: dict) -> "TraceModel":
+        """The same model simulated with ``options`` added to its own (a new counter)."""
+        return TraceModel(self.build, self.fixed, self.effects, self.start,
+                          {**self.options, **options}, self.typical_s, self.state, self.budget)
 
     @property
     def typical_s(self) -> float | None:
