@@ -45,6 +45,11 @@ class CandidateFits:
                          options=self.options, x_start=x, where=self.where,
                          start_state=self.state, refined=refined)
 
+    def refined(self, fit: TraceFit, max_nfev: int) -> TraceFit:
+        """``fit`` fitted again from its values and refined
+        (:func:`~pneunet.truth.circuits.fit.refine_fit`); a SolverError when that fails."""
+        return self._fit(fit.effects, dict(fit.values), max_nfev, refined=True)
+
     def base_start(self, guesses: bool = False) -> dict:
         """Starting values of the base parameters: the base fit's, except where it
         stopped at a bound of its range (a base model bent to mimic missing physics),
@@ -176,7 +181,7 @@ def refine_final(fits, name, fitting, max_nfev, notes, say) -> bool:
     final = fits[name]
     say(f"refining {name}")
     try:
-        again = fitting._fit(final.effects, dict(final.values), max_nfev, refined=True)
+        again = fitting.refined(final, max_nfev)
     except SolverError as err:
         notes.append(f"{name}: not refined: {err}")
         return False
