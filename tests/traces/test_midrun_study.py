@@ -137,7 +137,7 @@ def test_oscillator_heat_exchange_recorded_mid_run_is_named():
     assert d.verdict == "explained" and d.accepted == ["volume_heat_transfer"], d.report()
     # held out at 1.2× the floor, not at it (not pinned down: the gas temperature at the
     # first sample is started at the wall's, not fitted; the stand-alone's valve cavity
-    # is a volume): R_out's interval [1.134, 1.150] just misses 1.132, so the values are
+    # is a volume): R_out's interval [1.133, 1.151] just misses 1.132, so the values are
     # checked within 2 % of the truth, not by their intervals
     for k, truth in {"Rout": 1.132, "Rvent": 3.0, "V": 50.0}.items():
         assert d.final.values[k] == pytest.approx(truth, rel=0.02), (k, d.final.ci[k])

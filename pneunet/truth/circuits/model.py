@@ -61,14 +61,18 @@ class TraceModel:
         self.budget = (BUDGET_FACTOR, BUDGET_MIN_S) if budget is None else budget
 
     def with_state(self, state) -> "TraceModel":
-        """The same model started from ``state``."""
-        return TraceModel(self.build, self.fixed, self.effects, self.start, self.options,
-                          self.typical_s, state, self.budget)
+        """The same model started from ``state`` (a new counter)."""
+        return self._copy(state=state)
 
     def with_options(self, options: dict) -> "TraceModel":
         """The same model simulated with ``options`` added to its own (a new counter)."""
-        return TraceModel(self.build, self.fixed, self.effects, self.start,
-                          {**self.options, **options}, self.typical_s, self.state, self.budget)
+        return self._copy(options={**self.options, **options})
+
+    def _copy(self, **changes) -> "TraceModel":
+        args = {"build": self.build, "fixed": self.fixed, "effects": self.effects,
+                "start": self.start, "options": self.options, "typical_s": self.typical_s,
+                "state": self.state, "budget": self.budget, **changes}
+        return TraceModel(**args)
 
     @property
     def typical_s(self) -> float | None:
