@@ -42,9 +42,10 @@ def valve(p_in, p_out, p_ctrl):
 
 
 @functools.cache
-def limit_cycle(t_end=24.0, settle=8.0):
-    """(period s, p_min kPa, p_max kPa) of the tank's cycle after ``settle`` s."""
-    c_out, c_tank = capacitance(V_STUB), capacitance(V_TANK)
+def limit_cycle(t_end=24.0, settle=8.0, v_stub=V_STUB):
+    """(period s, p_min kPa, p_max kPa) of the tank's cycle after ``settle`` s, with a
+    ``v_stub`` mL stub at the valve output."""
+    c_out, c_tank = capacitance(v_stub), capacitance(V_TANK)
 
     def rhs(t, y):
         p_out, p_tank = y

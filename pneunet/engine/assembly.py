@@ -256,12 +256,18 @@ class CircuitDAE:
         """ẏ consistent with y: F_d(t, y, ẏ) = 0, ẏ_a = 0 (kPa/s), by three steps of Newton's
         method on ẏ_d (ẏ ← ẏ − M_dd⁻¹·F_d): exact after one where F is linear in ẏ, after
         two where it is piecewise linear (a thermal volume: its gas enters at the wall
-        temperature and leaves at its own)."""
+        temperature and leaves at its own); a step that moves no rate by more than 1e-12
+        of the largest ends them."""
         d = np.flatnonzero(self.differential)
         ydot = np.zeros(self.n)
-        for _ in range(3):
+        if not d.size:
+            return ydot
+        for i in range(3):
             f, mass = self._mass_data(t, y, ydot)
-            ydot[d] -= self._solve_mass(mass, f, d)
+            step = self._solve_mass(mass, f, d)
+            ydot[d] -= step
+            if i and np.abs(step).max() <= 1e-12 * np.abs(ydot[d]).max():
+                break
         return ydot
 
     def _solve_mass(self, mass, f, d) -> np.ndarray:
