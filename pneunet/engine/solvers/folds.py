@@ -107,8 +107,9 @@ class FoldMonitor:
         so a jump extrapolated from it came 1 ms late on every cycle and the period was
         5e-4 long, more than a recording's standard errors resolve.  Here the branch is
         followed as the DAE defines it: the differential states by Heun steps of ẏ_d, the
-        algebraic nodes solved by Newton's method at each, every step APPROACH_FRACTION of the time
-        κ² extrapolates to the fold; a step whose Newton finds no branch is halved.
+        algebraic nodes solved by Newton's method at each, every step
+        :data:`APPROACH_FRACTION` of the time κ² extrapolates to the fold; a step whose
+        Newton finds no branch is halved.
         """
         target = (FOLD_RESOLVED * self.reference) ** 2
         k2 = self.indicator(t, y) ** 2
