@@ -125,7 +125,8 @@ def test_oscillator_heat_exchange_recorded_mid_run_is_named():
     the floor): heat exchange makes the tank a thermal chamber whose inlet nodes were
     started at the valve output's pressure, which closed the valve at the first sample,
     and the consistent state failed at random trial R_out (a continuation 2-cycle around
-    the closed valve's root), so no fit moved R_out from the base's 1.006 (truth 1.132)."""
+    the closed valve's root), so no fit moved R_out from the base's 1.006 (truth 1.132).
+    Now named, each 95 % interval covering the truth."""
     from pneunet.design.circuits import oscillator
 
     start = float(np.random.default_rng([1, 7]).uniform(2.0, 10.0))
@@ -135,9 +136,11 @@ def test_oscillator_heat_exchange_recorded_mid_run_is_named():
     params = {"Rout": (1.4, 0.3, 5.0), "Rvent": (3.8, 0.5, 20.0), "V": (65.0, 5.0, 500.0)}
     d = diagnose_trace(oscillator, rec, params, node="tank")
     assert d.verdict == "explained" and d.accepted == ["volume_heat_transfer"], d.report()
-    # held out at 1.2× the floor, not at it (not pinned down: the gas temperature at the
-    # first sample is started at the wall's, not fitted; the stand-alone's valve cavity
-    # is a volume): R_out's interval [1.133, 1.151] just misses 1.132, so the values are
-    # checked within 2 % of the truth, not by their intervals
-    for k, truth in {"Rout": 1.132, "Rvent": 3.0, "V": 50.0}.items():
-        assert d.final.values[k] == pytest.approx(truth, rel=0.02), (k, d.final.ci[k])
+    # the gas temperature at the first sample is a guess (the wall's): compared from the
+    # first cycle start it left 1.18× the floor and R_out's interval [1.133, 1.151] missed
+    # 1.132; from the second (one whole cycle to settle), every interval covers.  τ in
+    # pneunet's reference (hA = m_ref·c_v/τ, m_ref at p_ref = ambient 96 kPa): 0.5·96/200
+    assert d.waterfall.steps[-1].held_out < 1.1 * d.noise_floor
+    for k, truth in {"Rout": 1.132, "Rvent": 3.0, "V": 50.0, "tau": 0.24}.items():
+        lo, hi = d.final.ci[k]
+        assert lo <= truth <= hi, (k, d.final.values[k], d.final.ci[k])

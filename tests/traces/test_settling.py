@@ -1,0 +1,43 @@
+"""Which fits compare an oscillating record from its second cycle start.
+
+A start from the record sets the recorded nodes and what they imply; an effect's own
+storage that the record does not show (a gas temperature, a tube's inner pressure) is
+guessed, so its fit leaves one whole cycle to settle (``unset_storage``); a recorded
+node given a volume (a dead volume at ``out``) is not a guess.
+"""
+import numpy as np
+
+from pneunet.netlist.builder import NetlistBuilder
+from pneunet.truth.circuits.effects import DeadVolume, Tube, VolumeHeatTransfer
+from pneunet.truth.circuits.fit import settling_time, unset_storage
+from pneunet.truth.circuits.initial_state import StartState
+from pneunet.truth.circuits.model import TraceModel
+
+VALUES = {"Rout": 1.132, "Rvent": 3.0}
+RECORDED = {"p_tank_kPa": None, "p_out_kPa": None}
+
+
+def _unset(*effects):
+    model = TraceModel(NetlistBuilder("netlists/oscillator.pn"), effects=effects)
+    return unset_storage(model, VALUES, RECORDED)
+
+
+def test_guessed_storage_is_the_effects_own_unrecorded_storage():
+    assert _unset() == []
+    assert _unset(DeadVolume("out")) == []  # p_out is recorded
+    heat = _unset(VolumeHeatTransfer())
+    assert len(heat) == 1 and heat[0].endswith("__T")  # the gas temperature's node
+    tube = _unset(Tube("X1", "ctrl"))
+    assert len(tube) == 1 and tube[0] not in ("tank", "out")
+    assert sorted(_unset(VolumeHeatTransfer(), Tube("X1", "ctrl"))) == sorted(heat + tube)
+
+
+def test_settling_counts_whole_cycles_from_the_record_s_rising_crossings():
+    t = np.arange(0.0, 10.0, 0.01)
+    y = 200.0 + 50.0 * np.sin(2 * np.pi * (t - 0.3) / 2.0)  # rises through 200 at 0.3 + 2k
+    record = StartState("record")
+    assert settling_time(record, t, y) == settling_time(record, t, y, 1)
+    assert [round(settling_time(record, t, y, k), 6) for k in (1, 2, 3)] == [0.3, 2.3, 4.3]
+    short = t < 6.0  # three rises: a fifth cycle start is the last there is
+    assert round(settling_time(record, t[short], y[short], 5), 6) == 4.3
+    assert settling_time(StartState("rest"), t, y, 2) == 0.0
