@@ -21,10 +21,12 @@ def test_a_fit_stopped_on_its_budget_warns_in_its_report():
     assert "stopped on its budget" in fit.unconverged()
     assert f"warning: {fit.unconverged()}" in fit.report()
     assert "--max-nfev" in fit.report()
+    assert fit.stopped_on_budget() and fit.as_dict()["stopped_on_budget"] is True
 
 
 def test_a_converged_fit_has_no_warning():
     fit = _fit(23.0, 40)
     assert fit.success and fit.unconverged() == ""
     assert "warning" not in fit.report()
+    assert fit.as_dict()["stopped_on_budget"] is False
     assert abs(fit.values["Rpull"] - 23.0) < 0.5

@@ -146,3 +146,13 @@ def test_lm_stopped_by_its_call_cap_goes_on_with_the_simulations_left():
     assert 24 - 2 * 3 < res.nfev <= 24
     assert len({c.tobytes() for c in fun.calls}) == len(fun.calls) == res.nfev
     assert float(res.fun @ res.fun) < 0.1
+
+
+def test_a_fit_out_of_simulations_says_so_and_a_converged_one_does_not():
+    """``on_budget`` comes from MINPACK's status, not from the wording of its message."""
+    lb, ub = np.log([0.1, 0.01]), np.log([50.0, 10.0])
+    x0 = np.log([0.2, 5.0])
+    short = least_squares_log(Decay(), x0, lb, ub, max_nfev=6, diff_step=1e-4)
+    assert not short.success and short.on_budget
+    full = least_squares_log(Decay(), x0, lb, ub, max_nfev=200, diff_step=1e-4)
+    assert full.success and not full.on_budget

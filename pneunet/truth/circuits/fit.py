@@ -65,6 +65,7 @@ class TraceFit(Summarized):
     unit: str = "kPa"
     scales: dict = field(default_factory=dict)
     extras: dict = field(default_factory=dict)
+    on_budget: bool = False  # stopped on its simulation budget before converging
 
     def _summary(self):
         estimates = (f"{k} {v:.4g} [{self.ci[k][0]:.3g}, {self.ci[k][1]:.3g}]"
@@ -110,7 +111,7 @@ class TraceFit(Summarized):
                 "rmse": self.rmse, "period_measured": self.period_measured,
                 "period_simulated": self.period_simulated, "period_error": self.period_error,
                 "sigma": self.sigma, "nfev": self.nfev, "success": self.success,
-                "message": self.message, "effects": [e.name for e in self.effects],
+                "stopped_on_budget": self.stopped_on_budget(), "message": self.message, "effects": [e.name for e in self.effects],
                 "wall_time_s": self.wall_time_s, "unit": self.unit,
                 "start_state": self.start_state.to_json() if self.start_state else None,
                 **{k: v for k, v in self.extras.items()
@@ -154,8 +155,7 @@ class TraceFit(Summarized):
 
     def stopped_on_budget(self) -> bool:
         """Whether the fit stopped on its simulation budget before converging."""
-        return not self.success and ("maxfev" in self.message
-                                     or "calls to function" in self.message)
+        return not self.success and self.on_budget
 
     def unconverged(self) -> str:
         """Why the estimates are not at an optimum ('' when the fit converged): a fit
@@ -344,7 +344,7 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
                      "model": model, "recording": where,
                      "compared": {s: int(keep_all[s].sum()) for s in sigs},
                      "keep": keep_all,
-                     "compared_from_s": settle_until})
+                     "compared_from_s": settle_until}, on_budget=res.on_budget)
 
 
 def refine_fit(res, fun: TraceResidual, lb, ub, max_nfev: int, pool):

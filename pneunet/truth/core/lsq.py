@@ -15,7 +15,8 @@ import numpy as np
 
 @dataclass
 class LsqResult:
-    """x (ln-parameters), residual ``fun``, Jacobian ``jac`` at x, simulations used."""
+    """x (ln-parameters), residual ``fun``, Jacobian ``jac`` at x, simulations used;
+    ``on_budget``: LM stopped on its simulation budget (MINPACK status 5)."""
 
     x: np.ndarray
     fun: np.ndarray
@@ -23,6 +24,7 @@ class LsqResult:
     nfev: int
     success: bool
     message: str
+    on_budget: bool = False
 
 
 def evaluate_many(fun, xs, pool=None) -> list:
@@ -144,7 +146,7 @@ def least_squares_log(fun, x0, lb, ub, *, max_nfev: int = 40, diff_step: float =
         if not free.any():
             break
     return LsqResult(x, np.asarray(f(x)), jacobian(x, range(len(x))), count["n"],
-                     1 <= status <= 4, " ".join(str(message).split()))
+                     1 <= status <= 4, " ".join(str(message).split()), status == 5)
 
 
 def refine(fun, res: LsqResult, lb, ub, *, max_nfev: int, diff_step: float, pool=None,
