@@ -41,3 +41,32 @@ def test_settling_counts_whole_cycles_from_the_record_s_rising_crossings():
     short = t < 6.0  # three rises: a fifth cycle start is the last there is
     assert round(settling_time(record, t[short], y[short], 5), 6) == 4.3
     assert settling_time(StartState("rest"), t, y, 2) == 0.0
+
+
+def test_an_oscillator_s_effect_fit_waits_a_cycle_a_driven_circuit_s_does_not():
+    """The oscillator with heat exchange recorded mid-run is compared from its second
+    cycle start; the inverter chain (driven: a cycle is its sources' 4 s period, almost
+    half its fit window) with a control-line tube from its first."""
+    from pneunet.design.circuits import oscillator
+    from pneunet.truth.circuits import fit_trace
+    from pneunet.truth.circuits.data import rising_crossings
+
+    from .standalone import oscillator_record
+    from .standalone_inverter import inverter_record
+
+    rec = oscillator_record(12.0, noise=0.4, seed=1, heat_tau=0.5)
+    rec = rec[rec["time_s"] >= 5.0 - 1e-9].reset_index(drop=True)
+    rec["time_s"] -= rec["time_s"].iloc[0]
+    fit = fit_trace(oscillator, rec, {"Rout": (1.132, 0.3, 5.0)}, node="tank",
+                    effects=(VolumeHeatTransfer(),), max_nfev=2, start_state="record",
+                    refined=False)
+    starts = rising_crossings(rec["time_s"].to_numpy(), rec["p_tank_kPa"].to_numpy())
+    assert fit.extras["compared_from_s"] == starts[1]
+
+    rec = inverter_record(5.4, 12.0, dt=0.02, noise=0.3, seed=1)
+    fit = fit_trace(NetlistBuilder("netlists/inverter.pn"), rec, {"Rpull": (20.0, 2.0, 200.0)},
+                    node="out1", effects=(Tube("X2.Xv", "ctrl"),), max_nfev=2,
+                    start_state="record", refined=False)
+    t = rec["time_s"].to_numpy()
+    starts = rising_crossings(t - t[0], rec["p_out1_kPa"].to_numpy())  # from the first sample
+    assert fit.start_state.driven and fit.extras["compared_from_s"] == starts[0]

@@ -253,7 +253,8 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
         model, guess, df, start_state, time_offset, where)
     node = node or next((s[2:] for s in sigs if s.startswith("p_")), None)
     settle_until = settling_time(state, times, meas.get(f"p_{node}"),
-                                 2 if unset_storage(model, guess, meas) else 1)
+                                 2 if not state.driven and unset_storage(model, guess, meas)
+                                 else 1)
     if settle_until > 0:  # a recorded node's first value is not compared: not fitted
         state = replace(state, fitted={k: v for k, v in state.fitted.items()
                                        if f"p_{k[len(P0_PREFIX):]}" not in meas})
@@ -425,10 +426,14 @@ def settling_time(state, times, y, cycles: int = 1) -> float:
 def unset_storage(model, values: dict, measured: dict) -> list:
     """Storage nodes that ``model``'s effects add and the record does not show (a gas
     temperature, a tube's inner pressure): a start from the record guesses them (the
-    wall's temperature, a neighbour's pressure), so its fit compares the record from
-    the second cycle start, one whole cycle later.  From the first, a mid-run record of
-    the oscillator's heat exchange ended 1.18× the noise floor with R_out's interval
-    missing the truth; from the second, 0.94×, every interval covering."""
+    wall's temperature, a neighbour's pressure), so the fit of a circuit that
+    oscillates on its own compares the record from the second cycle start, one whole
+    cycle later.  From the first, a mid-run record of the oscillator's heat exchange
+    ended 1.18× the noise floor with R_out's interval missing the truth; from the
+    second, 0.94×, every interval covering.  A driven circuit's cycle is its sources'
+    period, often a large part of the record (the inverter chain's: 4 s of a 10 s fit
+    window, without which its control-line tube was not found: 26.5× the floor against
+    1.04×)."""
     from ...engine.assembly import CircuitDAE
 
     if not model.effects:
