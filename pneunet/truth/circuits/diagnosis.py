@@ -11,7 +11,8 @@
    promising ones fully, each started at its best point moved by one Gauss–Newton step
    in the base parameters; rank all by their error on the later, held-out cycles;
 5. the verdict (:func:`pneunet.truth.core.verdict.decide`): ``adequate`` (base model at
-   the floor), ``explained`` (the best effect, or it plus the next, brings the held-out
+   the floor, and none of the candidates — screened once the base is above
+   :data:`~pneunet.truth.core.verdict.NEAR_FLOOR` × floor — clearly lower), ``explained`` (the best effect, or it plus the next, brings the held-out
    error within ``tolerance`` × floor) or ``unexplained`` (and where it sits).
 """
 from __future__ import annotations
@@ -25,7 +26,7 @@ import numpy as np
 from ...common.reprs import Summarized, listed, number
 from ..core.locate import best_lag, hot_phases, phase_profile
 from ..core.noise import ROUNDING_SIGMA, difference_sigma, resolution, segments
-from ..core.verdict import TOLERANCE, Step, at_floor, decide
+from ..core.verdict import NEAR_FLOOR, TOLERANCE, Step, at_floor, decide
 from ..core.waterfall import Waterfall
 from .candidate_fits import (CandidateFits, at_bound, base_refit, fit_pairs, fit_screened,
                              parsimonious_first, refine_final, second_effects, screen_data,
@@ -254,7 +255,7 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
         verdict, accepted = decide(steps, floor, tolerance)
         fitting = CandidateFits(build, df, params, fixed, node, train, test, base, pool,
                                 options, where, state, floor, tolerance)
-        if verdict != "adequate" and cand:
+        if cand and not at_floor(base_err, floor, min(NEAR_FLOOR, tolerance)):
             say(f"screening {len(cand)} candidate effects")
             t0 = time.perf_counter()
             names = list(params)
