@@ -12,8 +12,9 @@
    in the base parameters; rank all by their error on the later, held-out cycles;
 5. the verdict (:func:`pneunet.truth.core.verdict.decide`): ``adequate`` (base model at
    the floor, and none of the candidates — screened once the base is above
-   :data:`~pneunet.truth.core.verdict.NEAR_FLOOR` × floor — clearly lower), ``explained`` (the best effect, or it plus the next, brings the held-out
-   error within ``tolerance`` × floor) or ``unexplained`` (and where it sits).
+   :data:`~pneunet.truth.core.verdict.NEAR_FLOOR` × floor — clearly lower),
+   ``explained`` (the best effect, or it plus the next, brings the held-out error
+   within ``tolerance`` × floor) or ``unexplained`` (and where it sits).
 """
 from __future__ import annotations
 

@@ -111,7 +111,8 @@ class TraceFit(Summarized):
                 "rmse": self.rmse, "period_measured": self.period_measured,
                 "period_simulated": self.period_simulated, "period_error": self.period_error,
                 "sigma": self.sigma, "nfev": self.nfev, "success": self.success,
-                "stopped_on_budget": self.stopped_on_budget(), "message": self.message, "effects": [e.name for e in self.effects],
+                "stopped_on_budget": self.stopped_on_budget(), "message": self.message,
+                "effects": [e.name for e in self.effects],
                 "wall_time_s": self.wall_time_s, "unit": self.unit,
                 "start_state": self.start_state.to_json() if self.start_state else None,
                 **{k: v for k, v in self.extras.items()
