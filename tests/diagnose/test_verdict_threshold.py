@@ -44,7 +44,7 @@ def test_a_base_within_the_tolerance_yields_to_an_effect_clearly_at_the_floor(ba
     """Within 1.5 × the floor a base model was adequate whatever an effect did: the
     amplifier with a hidden 6 mL dead volume, on the logger's own clock, ended at 1.46 ×.
     Now an effect that takes it below NEAR_FLOOR (1.2) ×, and 10 % below the base, is
-    accepted; clean recordings' base fits end at 0.92–1.10 ×."""
+    accepted; clean recordings' base fits end at 0.91–1.10 ×."""
     steps = [Step("base", base * FLOOR), Step("+leak", effect * FLOOR, effects=("leak",))]
     assert decide(steps, FLOOR) == want
 

@@ -20,7 +20,7 @@ VERDICTS = ("adequate", "explained", "unexplained")
 TOLERANCE = 1.5
 #: a base model between this factor of the floor and TOLERANCE is adequate only when no
 #: candidate takes the held-out error below it, and by NEAR_GAIN of the base's at least:
-#: clean recordings' base fits end at 0.92–1.10× (coverage_trace.py, 240 recordings of
+#: clean recordings' base fits end at 0.91–1.10× (coverage_trace.py, 240 recordings of
 #: three seeds); the amplifier with a hidden 6 mL dead volume, recorded on the logger's
 #: own clock, ended at 1.46× and was called adequate
 NEAR_FLOOR = 1.2
