@@ -312,7 +312,7 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
         name = " + ".join(accepted) or "none"
         if verdict != "unexplained" and refine_final(fits, name, fitting,
                                                      BASE_BUDGET * max_nfev, notes, say):
-            step = len(steps) - 1 if accepted else 0
+            step = next(i for i, s in enumerate(steps) if list(s.effects) == accepted)
             steps[step] = replace(steps[step], held_out=fits[name].error(test))
             ranking = [r if r["effect"] != name else
                        _row(name, fits[name], test, floor, fitting.starts.get(name))

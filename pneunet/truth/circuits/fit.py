@@ -357,18 +357,12 @@ def refine_fit(res, fun: TraceResidual, lb, ub, max_nfev: int, pool):
     the fit as it is when its stopping radius was already that fine.  The simulations
     of both count."""
     model = fun.model.with_options(REFINE_OPTIONS)
-    finer = replace_model(fun, model)
+    finer = fun.with_model(model)
     again = refine(finer, res, lb, ub, max_nfev=max_nfev, diff_step=REFINE_DIFF_STEP,
                    pool=pool)
     if again is None:
         return res, fun, fun.model
     return replace(again, nfev=res.nfev + again.nfev), finer, model
-
-
-def replace_model(fun: TraceResidual, model: TraceModel) -> TraceResidual:
-    """``fun`` simulating ``model`` instead of its own."""
-    return TraceResidual(model, fun.names, fun.times, fun.signals, fun.measured, fun.keep,
-                         fun.scales, fun.align, fun.clock_step)
 
 
 def compared_masks(model: TraceModel, values: dict, measured: dict) -> dict:

@@ -276,6 +276,11 @@ class TraceResidual:
         self.clock_step = clock_step  # s per unit of a last x that shifts the clock (0: none)
         self.failures = 0
 
+    def with_model(self, model: TraceModel) -> "TraceResidual":
+        """The same residual simulating ``model`` instead (a refinement's finer one)."""
+        return TraceResidual(model, self.names, self.times, self.signals, self.measured,
+                             self.keep, self.scales, self.align, self.clock_step)
+
     def size(self) -> int:
         return int(sum(self.keep[s].sum() for s in self.signals))
 
