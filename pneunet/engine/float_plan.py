@@ -1,6 +1,7 @@
 """Small circuits evaluated on Python floats: the residual and Jacobian of
 :class:`~pneunet.engine.assembly.CircuitDAE` and its algebraic block, when every family
-evaluated has ``float_outflows`` (a few instances each: valves, resistors, volumes).
+evaluated has ``float_outflows`` (a few instances each: valves, resistors, volumes,
+thermal volumes, chambers and inlets).
 
 On a circuit of a few elements numpy's per-call overhead is most of the cost (the
 oscillator: ~14 µs per residual, of which its laws take ~2 µs), and IDA asks for a

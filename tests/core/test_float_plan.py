@@ -39,6 +39,25 @@ def _mixed():
     return c
 
 
+def _thermal():
+    """The oscillator's tank as a thermal chamber fed through two inlets (Simscape's
+    constant hA) and an actuator as a thermal volume of constant τ behind a resistor:
+    every thermal float path, flows into and out of the chamber, both heat scalings."""
+    c = _oscillator()
+    del c.elements["V1"]
+    c.add("thermal_chamber", "V1", ("tank", "theta"), V=200.0, tau=0.3)
+    for line, port in (("Rout", 1), ("Rvent", 0)):
+        spec = c.elements[line]
+        nodes = list(spec.nodes)
+        nodes[port] = f"tank__{line}"
+        spec.nodes = tuple(nodes)
+        c.add("thermal_inlet", f"I_{line}", (nodes[port], "tank", "theta"))
+    c.resistor("Ra", "out", "muscle", 0.5)
+    c.add("thermal_volume", "A1", ("muscle", "theta_a"), V=30.0, tau=0.05, scaling=1.0,
+          p0=120.0)
+    return c
+
+
 def _vectorised(circuit):
     """The same circuit's DAE evaluated by the vectorised path only."""
     dae = CircuitDAE(circuit)
@@ -46,7 +65,7 @@ def _vectorised(circuit):
     return dae
 
 
-@pytest.mark.parametrize("build", [_oscillator, _mixed])
+@pytest.mark.parametrize("build", [_oscillator, _mixed, _thermal])
 def test_floats_equal_the_vectorised_path_to_the_bit(build):
     floats, arrays = CircuitDAE(build()), _vectorised(build())
     assert floats._floats is not None  # the float path is the one under test

@@ -35,7 +35,22 @@ from __future__ import annotations
 
 import numpy as np
 
-from .base import ElementFamily, Param, register
+from .base import FEW_INSTANCES, ElementFamily, Param, register
+
+
+def _gas_terms(u, w, ud, wd, c, pr, tau, sc, ratio, partials):
+    """Wall heat H and mass storage M of the gas (u = p, w = θ, rates ud, wd; C, p_ref,
+    τ, s; ``ratio`` = (u/w)^s), and with ``partials`` H by (u, w) and M by (u, w, u̇,
+    ẇ): on arrays or on Python floats with the same operations, so the same bits."""
+    heat = c * ratio * (pr - w) / tau
+    cp = c * pr
+    w2 = w * w
+    mass = cp * (ud / w - u * wd / w2)
+    if not partials:
+        return heat, mass, None, None
+    d_heat = (sc * heat / u, -c * ratio / tau - sc * heat / w)
+    d_mass = (-cp * wd / w2, cp * (-ud / w2 + 2 * u * wd / (w2 * w)), cp / w, -cp * u / w2)
+    return heat, mass, d_heat, d_mass
 
 
 @register
@@ -71,25 +86,28 @@ class ThermalVolume(ElementFamily):
         p0 = self.column("p0")
         self._p_ref = np.where(np.isnan(p0), opts.ambient, p0)
         self._t_wall = opts.temperature
+        # few instances of constant hA or constant τ ((u/w)^s exact): on Python floats
+        self.on_floats = self.n <= FEW_INSTANCES and bool(np.all(np.isin(self._scaling, (0, 1))))
+        self._floats = [x.tolist() for x in (self._c, self._p_ref, self._tau, self._scaling,
+                                             self._gamma)]
 
     def _storage(self, p, pdot, partials=False):
         """Wall heat H and mass storage M = d/dt(p·V·M/(R·T)) (mg/s, see above) of the
         gas (u = p, w = θ), and with ``partials`` their derivatives: H by (u, w), M by
         (u, w, u̇, ẇ)."""
         u, w = p[..., 0], p[..., 1]
-        ud, wd = pdot[..., 0], pdot[..., 1]
-        c, pr = self._c, self._p_ref
-        ratio = (u / w) ** self._scaling
-        heat = c * ratio * (pr - w) / self._tau
-        cp = c * pr
-        mass = cp * (ud / w - u * wd / w ** 2)
-        if not partials:
-            return heat, mass, None, None
-        sc = self._scaling
-        d_heat = (sc * heat / u, -c * ratio / self._tau - sc * heat / w)
-        d_mass = (-cp * wd / w ** 2, cp * (-ud / w ** 2 + 2 * u * wd / w ** 3), cp / w,
-                  -cp * u / w ** 2)
-        return heat, mass, d_heat, d_mass
+        return _gas_terms(u, w, pdot[..., 0], pdot[..., 1], self._c, self._p_ref, self._tau,
+                          self._scaling, (u / w) ** self._scaling, partials)
+
+    def _float_terms(self, p, pdot, rows, partials):
+        """Per instance (i, u, w, ud, its :func:`_gas_terms`) on Python floats."""
+        for i, (iu, iw) in enumerate(rows):
+            u, w = p[iu], p[iw]
+            sc = self._floats[3][i]
+            c, pr, tau = self._floats[0][i], self._floats[1][i], self._floats[2][i]
+            terms = _gas_terms(u, w, pdot[iu], pdot[iw], c, pr, tau, sc,
+                               1.0 if sc == 0.0 else u / w, partials)
+            yield i, u, w, pdot[iu], terms
 
     def _inflow(self, p, pdot, heat):
         """s = C·ṗ − H, T_w/T_up and the mass inflow q = (T_w/T_up)·s/γ (mg/s)."""
@@ -108,7 +126,7 @@ class ThermalVolume(ElementFamily):
         s, k, q = self._inflow(p, pdot, heat)
         g, w = self._gamma, p[..., 1]
         # q = k·s/γ; k depends on w only where s < 0
-        dk_dw = np.where(s >= 0, 0.0, -self._p_ref / w ** 2)
+        dk_dw = np.where(s >= 0, 0.0, -self._p_ref / (w * w))
         dq_du = -k * dh_du / g
         dq_dw = (-k * dh_dw + dk_dw * s) / g
         dq_dud = k * self._c / g
@@ -120,6 +138,26 @@ class ThermalVolume(ElementFamily):
         dq_dpdot[:, 0, 0] = dq_dud
         dq_dpdot[:, 1, 0], dq_dpdot[:, 1, 1] = dq_dud - dm_dud, -dm_dwd
         return np.stack([q, q - mass], axis=-1), dq_dp, dq_dpdot
+
+    def float_outflows(self, t, p, pdot, rows, partials):
+        """:meth:`outflows` on Python floats, the same operations."""
+        q_all, dq_dp, dq_dpdot = [], [] if partials else None, [] if partials else None
+        for i, u, w, ud, (heat, mass, d_heat, d_mass) in self._float_terms(p, pdot, rows,
+                                                                          partials):
+            c, pr, g = self._floats[0][i], self._floats[1][i], self._floats[4][i]
+            s = c * ud - heat
+            k = 1.0 if s >= 0 else pr / w
+            q = k * s / g
+            q_all += (q, q - mass)
+            if not partials:
+                continue
+            dk_dw = 0.0 if s >= 0 else -pr / (w * w)
+            dq_du = -k * d_heat[0] / g
+            dq_dw = (-k * d_heat[1] + dk_dw * s) / g
+            dq_dud = k * c / g
+            dq_dp += (dq_du, dq_dw, dq_du - d_mass[0], dq_dw - d_mass[1])
+            dq_dpdot += (dq_dud, 0.0, dq_dud - d_mass[2], -d_mass[3])
+        return q_all, dq_dp, dq_dpdot
 
     def initial_pressure(self):
         # both unknowns start at p_ref: the gas node at p0, θ at p_ref (T = T_w)
@@ -167,6 +205,18 @@ class ThermalChamber(ThermalVolume):
         dq_dpdot[:, 1, 0], dq_dpdot[:, 1, 1] = -dm_dud, -dm_dwd
         return np.stack([energy, -mass], axis=-1), dq_dp, dq_dpdot
 
+    def float_outflows(self, t, p, pdot, rows, partials):
+        """:meth:`outflows` on Python floats, the same operations."""
+        q_all, dq_dp, dq_dpdot = [], [] if partials else None, [] if partials else None
+        for i, _, _, ud, (heat, mass, d_heat, d_mass) in self._float_terms(p, pdot, rows,
+                                                                          partials):
+            c, g = self._floats[0][i], self._floats[4][i]
+            q_all += ((c * ud - heat) / g, -mass)
+            if partials:
+                dq_dp += (-d_heat[0] / g, -d_heat[1] / g, -d_mass[0], -d_mass[1])
+                dq_dpdot += (c / g, 0.0, -d_mass[2], -d_mass[3])
+        return q_all, dq_dp, dq_dpdot
+
 
 @register
 class ThermalInlet(ElementFamily):
@@ -196,6 +246,8 @@ class ThermalInlet(ElementFamily):
         self._r = self.column("r")
         p0 = self.column("p0")
         self._p_ref = np.where(np.isnan(p0), context.options.ambient, p0)
+        self.on_floats = self.n <= FEW_INSTANCES
+        self._floats = list(zip(self._r.tolist(), self._p_ref.tolist()))
 
     def _terms(self, p):
         q = (p[..., 0] - p[..., 1]) / self._r
@@ -216,3 +268,15 @@ class ThermalInlet(ElementFamily):
         dq_dp[:, 1, 2] = -np.where(q >= 0, 0.0, q / self._p_ref)
         dq_dp[:, 2, 0], dq_dp[:, 2, 1] = g, -g
         return np.stack([q, -k * q, q], axis=-1), dq_dp, None
+
+    def float_outflows(self, t, p, pdot, rows, partials):
+        """:meth:`outflows` on Python floats, the same operations."""
+        q_all, dq_dp = [], [] if partials else None
+        for (il, ig, ih), (r, pr) in zip(rows, self._floats):
+            q = (p[il] - p[ig]) / r
+            k = 1.0 if q >= 0 else p[ih] / pr
+            q_all += (q, -k * q, q)
+            if partials:
+                g = 1.0 / r
+                dq_dp += (g, -g, 0.0, -k * g, k * g, -(0.0 if q >= 0 else q / pr), g, -g, 0.0)
+        return q_all, dq_dp, None
