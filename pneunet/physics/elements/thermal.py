@@ -88,8 +88,9 @@ class ThermalVolume(ElementFamily):
         self._t_wall = opts.temperature
         # few instances of constant hA or constant τ ((u/w)^s exact): on Python floats
         self.on_floats = self.n <= FEW_INSTANCES and bool(np.all(np.isin(self._scaling, (0, 1))))
-        self._floats = [x.tolist() for x in (self._c, self._p_ref, self._tau, self._scaling,
-                                             self._gamma)]
+        # per instance (C, p_ref, τ, s, γ) as Python floats
+        self._constants = list(zip(*(x.tolist() for x in (
+            self._c, self._p_ref, self._tau, self._scaling, self._gamma))))
 
     def _storage(self, p, pdot, partials=False):
         """Wall heat H and mass storage M = d/dt(p·V·M/(R·T)) (mg/s, see above) of the
@@ -100,14 +101,12 @@ class ThermalVolume(ElementFamily):
                           self._scaling, (u / w) ** self._scaling, partials)
 
     def _float_terms(self, p, pdot, rows, partials):
-        """Per instance (i, u, w, ud, its :func:`_gas_terms`) on Python floats."""
-        for i, (iu, iw) in enumerate(rows):
+        """Per instance ((C, p_ref, γ), w, u̇, its :func:`_gas_terms`) on Python floats."""
+        for (iu, iw), (c, pr, tau, sc, g) in zip(rows, self._constants):
             u, w = p[iu], p[iw]
-            sc = self._floats[3][i]
-            c, pr, tau = self._floats[0][i], self._floats[1][i], self._floats[2][i]
             terms = _gas_terms(u, w, pdot[iu], pdot[iw], c, pr, tau, sc,
                                1.0 if sc == 0.0 else u / w, partials)
-            yield i, u, w, pdot[iu], terms
+            yield (c, pr, g), w, pdot[iu], terms
 
     def _inflow(self, p, pdot, heat):
         """s = C·ṗ − H, T_w/T_up and the mass inflow q = (T_w/T_up)·s/γ (mg/s)."""
@@ -142,9 +141,8 @@ class ThermalVolume(ElementFamily):
     def float_outflows(self, t, p, pdot, rows, partials):
         """:meth:`outflows` on Python floats, the same operations."""
         q_all, dq_dp, dq_dpdot = [], [] if partials else None, [] if partials else None
-        for i, u, w, ud, (heat, mass, d_heat, d_mass) in self._float_terms(p, pdot, rows,
-                                                                          partials):
-            c, pr, g = self._floats[0][i], self._floats[1][i], self._floats[4][i]
+        for (c, pr, g), w, ud, (heat, mass, d_heat, d_mass) in self._float_terms(
+                p, pdot, rows, partials):
             s = c * ud - heat
             k = 1.0 if s >= 0 else pr / w
             q = k * s / g
@@ -208,9 +206,8 @@ class ThermalChamber(ThermalVolume):
     def float_outflows(self, t, p, pdot, rows, partials):
         """:meth:`outflows` on Python floats, the same operations."""
         q_all, dq_dp, dq_dpdot = [], [] if partials else None, [] if partials else None
-        for i, _, _, ud, (heat, mass, d_heat, d_mass) in self._float_terms(p, pdot, rows,
-                                                                          partials):
-            c, g = self._floats[0][i], self._floats[4][i]
+        for (c, _, g), _, ud, (heat, mass, d_heat, d_mass) in self._float_terms(
+                p, pdot, rows, partials):
             q_all += ((c * ud - heat) / g, -mass)
             if partials:
                 dq_dp += (-d_heat[0] / g, -d_heat[1] / g, -d_mass[0], -d_mass[1])
@@ -247,7 +244,7 @@ class ThermalInlet(ElementFamily):
         p0 = self.column("p0")
         self._p_ref = np.where(np.isnan(p0), context.options.ambient, p0)
         self.on_floats = self.n <= FEW_INSTANCES
-        self._floats = list(zip(self._r.tolist(), self._p_ref.tolist()))
+        self._constants = list(zip(self._r.tolist(), self._p_ref.tolist()))  # (r, p_ref)
 
     def _terms(self, p):
         q = (p[..., 0] - p[..., 1]) / self._r
@@ -272,7 +269,7 @@ class ThermalInlet(ElementFamily):
     def float_outflows(self, t, p, pdot, rows, partials):
         """:meth:`outflows` on Python floats, the same operations."""
         q_all, dq_dp = [], [] if partials else None
-        for (il, ig, ih), (r, pr) in zip(rows, self._floats):
+        for (il, ig, ih), (r, pr) in zip(rows, self._constants):
             q = (p[il] - p[ig]) / r
             k = 1.0 if q >= 0 else p[ih] / pr
             q_all += (q, -k * q, q)
