@@ -37,6 +37,9 @@ class Fitting:
     def base_start(self, guesses=False):
         return {}
 
+    def second_start(self, row):
+        return {}
+
     def reached(self, fits):
         return any(f.error() <= 1.5 * FLOOR for n, f in fits.items() if n != "none")
 

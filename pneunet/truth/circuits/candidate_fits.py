@@ -30,6 +30,9 @@ class CandidateFits:
         self.where, self.state, self.floor, self.tolerance = where, state, floor, tolerance
         self.failed = {}  # effect name -> why it has no fit
         self.starts = {}  # effect name -> [{start values, held-out rms, simulations}]
+        #: the screen's (names, Jacobian, model arguments, data), once it has run
+        self.screen_setup = None
+        self.screen_simulations = 0  # simulations of the screens second starts ran
 
     def _fit(self, effs, x_start, max_nfev, refined=False):
         p = {k: (float(np.clip(self.base.values[k], lo, hi)), lo, hi)
@@ -59,6 +62,27 @@ class CandidateFits:
             v = self.base.values[k]
             out[k] = guess if guesses or near_bound(v, lo, hi) else v
         return out
+
+    def second_start(self, row) -> dict:
+        """Start values of the second fit of a screened candidate (``row``): the base
+        parameters at the user's guesses and the effect's grid point that fits best
+        from there (its screen again, anchored at the guesses): a base fit bent to
+        mimic the missing effect misranks the effect's points (the inverter chain's
+        control-line tube: from the bent fit its smallest point ranks first, from the
+        guesses the one nearest the truth).  Without a screen, or where it fails, the
+        effect's guess or its range's log-middle (:func:`_second_start`)."""
+        eff = row["effect"]
+        guesses = self.base_start(guesses=True)
+        if self.screen_setup is not None:
+            names, jac, model_args, data = self.screen_setup
+            x_guess = np.log([guesses[k] for k in names])
+            again = screen_candidates([eff], names, x_guess, jac, self.params, model_args,
+                                      data, self.pool)[0]
+            self.screen_simulations += again["simulations"]
+            if math.isfinite(again["rss"]):
+                return dict(again["x"])
+        return {**guesses, **{k: _second_start(v, row["x"].get(k))
+                              for k, v in eff.params.items()}}
 
     def reached(self, fits) -> bool:
         """Whether a fitted candidate in ``fits`` reaches the noise floor (held out)."""
@@ -122,9 +146,10 @@ def fit_screened(rows, fits, fitting, screen, max_nfev, say) -> None:
 
 
 def _second_starts(rows, close, fits, fitting, max_nfev, say) -> None:
-    """A second start (every base parameter at the user's guess) for each of the first
-    round ``close``, and for each later fitted row whose fit stayed in the base fit's
-    valley (:data:`STAYED`), in the screen's order, until one reaches the floor."""
+    """A second start (:meth:`CandidateFits.second_start`: every base parameter at the
+    user's guess) for each of the first round ``close``, and for each later fitted row
+    whose fit stayed in the base fit's valley (:data:`STAYED`), in the screen's order,
+    until one reaches the floor."""
     base = fitting.base.error(fitting.test)
     stayed = [r for r in rows[len(close):] if r["effect"].name in fits
               and fits[r["effect"].name].error(fitting.test) >= STAYED * base]
@@ -133,9 +158,7 @@ def _second_starts(rows, close, fits, fitting, max_nfev, say) -> None:
         if eff.name not in fits and eff.name not in fitting.failed:
             continue
         say(f"fitting {eff.name} from a second start")
-        second = {k: _second_start(v, row["x"].get(k)) for k, v in eff.params.items()}
-        fit = fitting.start(eff, {**fitting.base_start(guesses=True), **second}, max_nfev,
-                            "second start")
+        fit = fitting.start(eff, fitting.second_start(row), max_nfev, "second start")
         if fit is not None and (eff.name not in fits or fit.error(fitting.test)
                                 < fits[eff.name].error(fitting.test)):
             fits[eff.name] = fit

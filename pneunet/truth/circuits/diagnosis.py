@@ -264,15 +264,17 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
             data_fit, jac = screen_data(df, train, base)
             n_res = sum(int(v.sum()) for v in data_fit[3].values())
             typical = base.extras["model"].typical_s
-            rows = screen_candidates(cand, names, x_hat, jac, params,
-                                     ((build, fixed), {"options": options,
-                                                       "typical_s": typical, "state": state}),
-                                     data_fit, pool)
+            model_args = ((build, fixed), {"options": options, "typical_s": typical,
+                                           "state": state})
+            rows = screen_candidates(cand, names, x_hat, jac, params, model_args, data_fit,
+                                     pool)
+            fitting.screen_setup = (names, jac, model_args, data_fit)
             timing["screen_s"] = time.perf_counter() - t0
             timing["screen_simulations"] = sum(r["simulations"] for r in rows)
             t0 = time.perf_counter()
             fit_screened(rows, fits, fitting, screen, 4 * max_nfev, say)
             timing["candidate_fits_s"] = time.perf_counter() - t0
+            timing["screen_simulations"] += fitting.screen_simulations
             fitted = sorted((n for n in fits if n != "none"), key=lambda n: fits[n].error(test))
             fitted, alike = parsimonious_first(fitted, fits, test, floor, tolerance)
             if alike:
