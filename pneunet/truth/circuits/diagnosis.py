@@ -284,7 +284,9 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
             ranking += [unfitted_row(r, fitting.failed, n_res) for r in rows
                         if r["effect"].name not in fits]
             ranking.sort(key=lambda r: (r["held_out_rms"] is None, r["held_out_rms"] or 0))
-            if fitted:
+            # a waterfall step is an effect that lowers the held-out error: a best single
+            # fit worse than the base model stays in the ranking only
+            if fitted and fits[fitted[0]].error(test) < base_err:
                 best = fitted[0]
                 steps.append(Step(best, fits[best].error(test), effects=(best,)))
                 # noise floor from the best model too: less misfit leaks into it
@@ -294,7 +296,7 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
                     noise["model"] = best
                     fitting.floor = floor
                 verdict, accepted = decide(steps, floor, tolerance)
-                if verdict == "unexplained" and steps[1].held_out < steps[0].held_out:
+                if verdict == "unexplained":
                     t0 = time.perf_counter()
                     seconds = second_effects(fits, best, fitted, cand, params, fitting,
                                               (build, fixed, options, state), df, train, pool,
