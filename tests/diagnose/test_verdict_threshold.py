@@ -1,11 +1,12 @@
 """Verdicts just inside and just outside their tolerance (issue 39): a held-out error of
 1.4 × the noise floor is "at the floor", 1.6 × is not (docs/diagnose.md: within 1.5 ×);
 a base model above 1.2 × yields to an effect clearly below that.
-Every call uses the default tolerance, the one the valve and circuit diagnoses use."""
+Every call uses the default tolerance, the one the valve and circuit diagnoses use, but
+the screen's bound with a tighter one."""
 import pytest
 
 from pneunet.truth import Step, decide, verdict
-from pneunet.truth.core.verdict import at_floor
+from pneunet.truth.core.verdict import at_floor, needs_candidates
 
 FLOOR = 2.0  # any unit
 
@@ -65,3 +66,13 @@ def test_step_json_says_null_for_unknown_numbers():
                  "effects": ["leak"], "n": 5}
     assert Step("x", float("inf"), se=0.5).to_json()["held_out_rms"] is None
     assert Step("x", 2.0, se=0.5).to_json()["held_out_se"] == 0.5
+
+
+@pytest.mark.parametrize("base, tolerance, screened", [
+    (1.15, 1.5, False),  # below NEAR_FLOOR: adequate, no candidate looked at
+    (1.25, 1.5, True),   # within the tolerance but above NEAR_FLOOR: screened
+    (1.6, 1.5, True),
+    (1.15, 1.1, True),   # a tolerance tighter than NEAR_FLOOR is the bound
+])
+def test_candidates_are_screened_above_near_floor(base, tolerance, screened):
+    assert needs_candidates(base * FLOOR, FLOOR, tolerance) is screened

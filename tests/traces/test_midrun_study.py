@@ -1,9 +1,9 @@
 """Recordings as a logger makes them, diagnosed whole (issue 31; one to four minutes each).
 CI runs the ``study`` cases (``python -m pytest -m study``): the new user's recording, the
 oscillator's heat exchange and a supply ripple recorded mid-run, the clean driven one, heat
-plus a tube at once (both effects named) and the leak (outside the library).  The single effects and the compliant actuator are ``study_long``
-(``python -m pytest -m study_long``; ``benchmarks/study_trace_diagnosis.py --driven`` runs
-the same cases for its table).
+plus a tube at once (both effects named) and the leak (outside the library).  The single
+effects and the compliant actuator are ``study_long`` (``python -m pytest -m study_long``;
+``benchmarks/study_trace_diagnosis.py --driven`` runs the same cases for its table).
 
 * The new user's recording: the oscillator of ``netlists/oscillator.pn`` with R_vent 3.5
   (netlist: 3) and a hidden 3 mL volume at ``out``, 20 Hz, 0.3 kPa noise, the logger

@@ -27,7 +27,7 @@ import numpy as np
 from ...common.reprs import Summarized, listed, number
 from ..core.locate import best_lag, hot_phases, phase_profile
 from ..core.noise import ROUNDING_SIGMA, difference_sigma, resolution, segments
-from ..core.verdict import NEAR_FLOOR, TOLERANCE, Step, at_floor, decide
+from ..core.verdict import TOLERANCE, Step, at_floor, decide, needs_candidates
 from ..core.waterfall import Waterfall
 from .candidate_fits import (CandidateFits, at_bound, base_refit, fit_pairs, fit_screened,
                              parsimonious_first, refine_final, second_effects, screen_data,
@@ -256,7 +256,7 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
         verdict, accepted = decide(steps, floor, tolerance)
         fitting = CandidateFits(build, df, params, fixed, node, train, test, base, pool,
                                 options, where, state, floor, tolerance)
-        if cand and not at_floor(base_err, floor, min(NEAR_FLOOR, tolerance)):
+        if cand and needs_candidates(base_err, floor, tolerance):
             say(f"screening {len(cand)} candidate effects")
             t0 = time.perf_counter()
             names = list(params)

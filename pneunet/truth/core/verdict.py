@@ -62,6 +62,13 @@ def verdict(base_error: float, final_error: float, floor: float, accepted,
     return "adequate" if at_floor(base_error, floor, tolerance) else "unexplained"
 
 
+def needs_candidates(base_error: float, floor: float, tolerance: float = TOLERANCE) -> bool:
+    """Whether a base model's held-out error is above :data:`NEAR_FLOOR` × ``floor``
+    (or ``tolerance`` ×, if smaller): below it the base is adequate whatever a candidate
+    does, above it the candidates are screened and :func:`decide` may accept one."""
+    return not at_floor(base_error, floor, min(NEAR_FLOOR, tolerance))
+
+
 def decide(steps: list[Step], floor: float, tolerance: float = TOLERANCE) -> tuple[str, list]:
     """(verdict, accepted effect names) from the waterfall ``steps`` (base first, then
     the model with 1, 2 … effects, each step's ``effects`` the whole set so far): the
@@ -76,7 +83,7 @@ def decide(steps: list[Step], floor: float, tolerance: float = TOLERANCE) -> tup
     if not at_floor(base, floor, tolerance):
         accepted = next((list(s.effects) for s in steps[1:]
                          if at_floor(s.held_out, floor, tolerance)), [])
-    elif not at_floor(base, floor, near):
+    elif needs_candidates(base, floor, tolerance):
         accepted = next((list(s.effects) for s in steps[1:]
                          if at_floor(s.held_out, floor, near)
                          and s.held_out <= (1.0 - NEAR_GAIN) * base), [])
