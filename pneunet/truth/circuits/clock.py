@@ -84,11 +84,13 @@ def varying_waveforms(circuit, t0: float, t1: float) -> list:
     return out
 
 
-def source_clock(circuit, data, origin: float) -> tuple[float, str, float]:
+def source_clock(circuit, data, origin: float,
+                 slack: float = CLOCK_SLACK) -> tuple[float, str, float]:
     """(netlist time of the first sample, s; a note, '' when the file's clock is kept;
     the sources' common period, s, 0 when none) for a recording ``data`` (time_s from
     0, p_<node>_kPa columns; the file's first time stamp ``origin``) of ``circuit`` (at
-    the parameter guesses) driven by its sources."""
+    the parameter guesses) driven by its sources; the file's clock is kept within
+    ``slack`` × the best phase's rms misfit."""
     from .data import signal_of_column
     from .model import sample_at
 
@@ -149,7 +151,7 @@ def source_clock(circuit, data, origin: float) -> tuple[float, str, float]:
     direct = origin + t_w[-1] <= float(sol.t[-1])
     at_origin = origin if direct else settled + (origin - delay) % period
     at_file = float(misfit([at_origin])[0])
-    if at_file <= CLOCK_SLACK ** 2 * least:
+    if at_file <= slack ** 2 * least:
         return origin, "", period
     offset = delay + phase + period * max(1, math.ceil(span / period))
     ratio = math.sqrt(at_file / least)

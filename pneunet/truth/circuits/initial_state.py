@@ -268,6 +268,17 @@ def choose_start(model, values: dict, data, mode: str = "auto",
             from .clock import source_clock
 
             time_offset, clock, period = source_clock(circuit, data, origin)
+            if not clock and origin == 0 and mode == "auto":
+                state = _start_at(model, values, data, mode, time_offset, where)
+                if state.mode == "rest":
+                    return state
+                # a file clock from 0 whose first samples are off the rest state is no
+                # record from switch-on: a logger's own clock, kept only where it fits best
+                time_offset, clock, period = source_clock(circuit, data, origin, slack=1.0)
+                if not clock:
+                    return state
+                clock = ("the file's clock starts at 0 but the first samples are off the "
+                         "rest state (no record from switch-on); " + clock)
     state = _start_at(model, values, data, mode, time_offset, where)
     return replace(state, clock=clock, clock_period=period) if clock else state
 
