@@ -6,7 +6,13 @@ the best fit continued where its budget stopped it; a candidate the screen shows
 worse is never fitted."""
 from types import SimpleNamespace
 
-from pneunet.truth.circuits.candidate_fits import CONTINUATIONS, STAYED, fit_screened
+import numpy as np
+import pandas as pd
+import pytest
+
+from pneunet.truth.circuits.candidate_fits import (CLOCK_NUDGES, CONTINUATIONS, STAYED,
+                                                   fit_screened)
+from pneunet.truth.circuits.initial_state import StartState
 from pneunet.truth.circuits.screen import SCREEN_KEEP
 
 FLOOR = 1.0
@@ -22,17 +28,18 @@ class Fitting:
         self.base = SimpleNamespace(error=lambda window=None: base)
         self.stopped = set(stopped)  # candidates whose fits stop on their budget
 
-    def start(self, eff, x_start, max_nfev, kind):
+    def start(self, eff, x_start, max_nfev, kind, state=None):
         """A second start halves a candidate's held-out error, and so does each
-        continuation (a start from a fit's own values)."""
+        continuation (a start from a fit's own values and its start state)."""
         kind = {"screen point": "first", "second start": "second"}.get(kind, kind)
-        assert kind != "continued" or x_start.get("from") == eff.name
+        assert kind != "continued" or x_start.get("from") == eff.name == state.of
         self.calls.append((eff.name, kind))
         err = x_start.get("err", self.held_out[eff.name]) * (1.0 if kind == "first" else 0.5)
         stopped = eff.name in self.stopped
         return SimpleNamespace(error=lambda window=None: err, effects=(eff,),
                                stopped_on_budget=lambda: stopped,
-                               values={"from": eff.name, "err": err})
+                               values={"from": eff.name, "err": err},
+                               start_state=SimpleNamespace(of=eff.name, clock_ci=()))
 
     def base_start(self, guesses=False):
         return {}
@@ -112,3 +119,50 @@ def test_a_converged_best_fit_is_not_continued():
     fitting = Fitting({"e0": 6, "e1": 9, "e2": 4.8})
     fit_screened(screened, {}, fitting, 3, 160, lambda m: None)
     assert ("e2", "continued") not in fitting.calls
+
+
+class ClockFitting(Fitting):
+    """Stand-in whose fits fit the logger's clock: a fit's error is
+    ``errors[first sample's netlist time]`` (0.02 s samples), its state the one given."""
+
+    df = pd.DataFrame({"time_s": 0.02 * np.arange(100)})
+
+    def __init__(self, errors, **kw):
+        super().__init__({"e0": errors[0.0]}, **kw)
+        self.errors = errors
+        self.first = StartState("record", time_offset=0.0, driven=True, clock="estimated",
+                                clock_period=4.0, clock_ci=(-0.001, 0.001))
+
+    def start(self, eff, x_start, max_nfev, kind, state=None):
+        state = state or self.first
+        self.calls.append((eff.name, kind, round(state.time_offset, 6), state.clock_ci))
+        err = self.errors[round(state.time_offset, 6)]
+        return SimpleNamespace(error=lambda window=None: err, effects=(eff,),
+                               stopped_on_budget=lambda: False, values={}, start_state=state)
+
+
+@pytest.mark.parametrize("better", [-0.01, 0.01, None])
+def test_the_best_fit_on_a_fitted_clock_is_started_half_a_sample_either_way(better):
+    """A fit above the floor on a fitted clock is fitted again from its clock moved half
+    a sample (0.01 s) each way; the lower cost is kept."""
+    errors = {0.0: 3.0, -0.01: 4.0, 0.01: 5.0}
+    if better is not None:
+        errors[better] = 1.2
+    fitting = ClockFitting(errors)
+    fits = {}
+    fit_screened(rows(1.0), fits, fitting, 3, 160, lambda m: None)
+    moved = [c for c in fitting.calls if c[1].startswith("clock moved")]
+    assert [c[2] for c in moved] == [0.02 * k for k in CLOCK_NUDGES]
+    assert all(c[3] == () for c in moved)  # a moved clock has no interval yet
+    assert fits["e0"].error() == (1.2 if better is not None else 3.0)
+    assert fits["e0"].start_state.time_offset == pytest.approx(better or 0.0)
+
+
+def test_a_fit_at_the_floor_or_on_the_files_clock_is_not_started_again():
+    fitting = ClockFitting({0.0: 1.0})  # at the floor
+    fit_screened(rows(1.0), {}, fitting, 3, 160, lambda m: None)
+    assert len(fitting.calls) == 1
+    fitting = ClockFitting({0.0: 3.0})
+    fitting.first = StartState("record", driven=True)  # the file's clock: none fitted
+    fit_screened(rows(1.0), {}, fitting, 3, 160, lambda m: None)
+    assert all(not c[1].startswith("clock") for c in fitting.calls)

@@ -8,11 +8,13 @@ from the best model's values).  Used by
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 
 from ...common.errors import SolverError
 from ..core.verdict import Step, at_floor, indistinguishable
+from .clock import clock_unit
 from .data import compared_samples, signal_of_column
 from .fit import TraceFit, fit_trace, near_bound
 from .screen import SCREEN_KEEP, screen_candidates, step_starts
@@ -34,7 +36,7 @@ class CandidateFits:
         self.screen_setup = None
         self.screen_simulations = 0  # simulations of the screens second starts ran
 
-    def _fit(self, effs, x_start, max_nfev, refined=False):
+    def _fit(self, effs, x_start, max_nfev, refined=False, state=None):
         p = {k: (float(np.clip(self.base.values[k], lo, hi)), lo, hi)
              for k, (_, lo, hi) in self.params.items()}
         for e in effs:
@@ -46,12 +48,13 @@ class CandidateFits:
         return fit_trace(self.build, self.df, p, fixed=self.fixed, node=self.node,
                          window=self.train, effects=effs, max_nfev=max_nfev, pool=self.pool,
                          options=self.options, x_start=x, where=self.where,
-                         start_state=self.state, refined=refined)
+                         start_state=state or self.state, refined=refined)
 
     def refined(self, fit: TraceFit, max_nfev: int) -> TraceFit:
         """``fit`` fitted again from its values and refined
         (:func:`~pneunet.truth.circuits.fit.refine_fit`); a SolverError when that fails."""
-        return self._fit(fit.effects, dict(fit.values), max_nfev, refined=True)
+        return self._fit(fit.effects, dict(fit.values), max_nfev, refined=True,
+                         state=fit.start_state)
 
     def base_start(self, guesses: bool = False) -> dict:
         """Starting values of the base parameters: the base fit's, except where it
@@ -89,14 +92,15 @@ class CandidateFits:
         return any(at_floor(f.error(self.test), self.floor, self.tolerance)
                    for n, f in fits.items() if n != "none")
 
-    def start(self, eff, x_start, max_nfev, kind: str) -> TraceFit | None:
+    def start(self, eff, x_start, max_nfev, kind: str, state=None) -> TraceFit | None:
         """The fit of ``eff`` (None: the base model) from ``x_start`` (its parameters;
-        the base ones from the base fit's or the screen's); None (and why in ``failed``)
-        when it fails.  Every start is listed in ``starts``, with ``kind`` (where it
-        started: 'screen point', 'second start', 'continued', …)."""
+        the base ones from the base fit's or the screen's) and ``state`` (the start state
+        of the fit ``x_start`` comes from, its fitted clock; default the base fit's);
+        None (and why in ``failed``) when it fails.  Every start is listed in ``starts``,
+        with ``kind`` (where it started: 'screen point', 'second start', 'continued', …)."""
         name = "none" if eff is None else eff.name
         try:
-            fit = self._fit(() if eff is None else (eff,), x_start, max_nfev)
+            fit = self._fit(() if eff is None else (eff,), x_start, max_nfev, state=state)
         except SolverError as err:
             self.failed.setdefault(name, f"fit failed: {err}")
             return None
@@ -107,12 +111,12 @@ class CandidateFits:
              "converged": fit.success})
         return fit
 
-    def pair(self, effects, x_start, max_nfev, notes) -> TraceFit | None:
+    def pair(self, effects, x_start, max_nfev, notes, state=None) -> TraceFit | None:
         """Two effects at once from ``x_start`` (a single fit's own values and the
-        second's start, never values a failed fit left at a bound); None (and why in
-        ``notes``) when it fails."""
+        second's start, never values a failed fit left at a bound) and ``state`` (that
+        fit's start state); None (and why in ``notes``) when it fails."""
         try:
-            return self._fit(effects, x_start, max_nfev)
+            return self._fit(effects, x_start, max_nfev, state=state)
         except SolverError as err:
             notes.append(f"{' + '.join(e.name for e in effects)}: fit failed: {err}")
             return None
@@ -143,6 +147,7 @@ def fit_screened(rows, fits, fitting, screen, max_nfev, say) -> None:
     if not fitting.reached(fits):
         _second_starts(rows, close, fits, fitting, max_nfev, say)
     continue_stopped(fits, fitting, max_nfev, say)
+    clock_restarts(fits, fitting, max_nfev, say)
 
 
 def _second_starts(rows, close, fits, fitting, max_nfev, say) -> None:
@@ -190,10 +195,43 @@ def continue_stopped(fits, fitting, max_nfev, say) -> None:
             return
         last = fits[name]
         say(f"fitting {name} on from where its budget stopped it")
-        again = fitting.start(last.effects[0], dict(last.values), max_nfev, "continued")
+        again = fitting.start(last.effects[0], dict(last.values), max_nfev, "continued",
+                              last.start_state)
         if again is None or again.error() >= last.error():
             return
         fits[name] = again
+
+
+#: sample spacings the best candidate's fitted clock is moved for its other starts
+CLOCK_NUDGES = (-0.5, 0.5)
+
+
+def clock_restarts(fits, fitting, max_nfev, say) -> None:
+    """The best fitted candidate, when it fitted the logger's clock with the parameters
+    and stopped above the floor while improving on the base model, fitted again from its
+    values with the clock moved by each of :data:`CLOCK_NUDGES` sample spacings; the
+    lowest cost on the fit window is kept.  An edge sharper than a sample puts a kink in
+    the misfit each time a sample crosses it, and LM stops a fraction of a sample from
+    the clock's minimum (the inverter chain's control-line tube, recorded from 4.08 s on
+    the logger's clock: 1.96× the floor; from its clock half a sample later, 1.29×)."""
+    test = fitting.test
+    name = min((n for n in fits if n != "none"), key=lambda n: fits[n].error(test),
+               default=None)
+    if name is None or fitting.reached(fits) \
+            or fits[name].error(test) >= fitting.base.error(test):
+        return
+    first = fits[name]
+    state = first.start_state
+    if not state.clock_ci:
+        return
+    step = clock_unit(state, fitting.df["time_s"].to_numpy(float))
+    for k in CLOCK_NUDGES:
+        say(f"fitting {name} again with its clock moved {k:+g} sample spacings")
+        moved = replace(state, time_offset=state.time_offset + k * step, clock_ci=())
+        again = fitting.start(first.effects[0], dict(first.values), max_nfev,
+                              f"clock moved {k:+g} samples", moved)
+        if again is not None and again.error() < fits[name].error():
+            fits[name] = again
 
 
 def refine_final(fits, name, fitting, max_nfev, notes, say) -> bool:
@@ -233,7 +271,7 @@ def second_effects(fits, best, fitted, cand, params, fitting, model_setup, df, t
     model hid: its screen ran around a base fit bent to mimic two effects), then the next
     single fit that did not stop at a bound, started from ``best``'s values."""
     first = fits[best]
-    build, fixed, options, state = model_setup
+    build, fixed, options, _ = model_setup
     names = list(first.values)
     p2 = {**params, **first.effects[0].params}
     others = [e for e in cand if e.name != best]
@@ -244,7 +282,8 @@ def second_effects(fits, best, fitted, cand, params, fitting, model_setup, df, t
         data, jac = screen_data(df, train, first)
         rows = screen_candidates(
             others, names, np.log([first.values[k] for k in names]), jac, p2,
-            ((build, fixed), {"options": options, "typical_s": typical, "state": state}),
+            ((build, fixed), {"options": options, "typical_s": typical,
+                              "state": first.start_state}),
             data, pool, on_top=first.effects)
         step_starts(rows[:1], pool)
         if math.isfinite(rows[0]["rss"]):
@@ -262,7 +301,8 @@ def fit_pairs(fits, best, seconds, steps, fitting, max_nfev, notes, say):
     test, floor, tolerance = fitting.test, fitting.floor, fitting.tolerance
     for nxt, x_start in seconds:
         say(f"fitting {best} + {nxt.name}")
-        pair = fitting.pair((fits[best].effects[0], nxt), x_start, max_nfev, notes)
+        pair = fitting.pair((fits[best].effects[0], nxt), x_start, max_nfev, notes,
+                            fits[best].start_state)
         name = f"{best} + {nxt.name}"
         if pair is not None and pair.error(test) < steps[-1].held_out:
             pair = _continued_pair(pair, name, fitting, max_nfev, notes, say)
@@ -285,7 +325,8 @@ def _continued_pair(pair, name, fitting, max_nfev, notes, say):
         if not pair.stopped_on_budget():
             break
         say(f"fitting {name} on from where its budget stopped it")
-        again = fitting.pair(pair.effects, dict(pair.values), max_nfev, notes)
+        again = fitting.pair(pair.effects, dict(pair.values), max_nfev, notes,
+                             pair.start_state)
         if again is None or again.error() >= pair.error():
             break
         pair = again
@@ -303,7 +344,8 @@ def single_refit_from_pair(fits, best, steps, fitting, max_nfev, say) -> bool:
     drop = pair.effects[1].params
     say(f"fitting {best} again from the pair's values")
     again = fitting.start(pair.effects[0], {k: v for k, v in pair.values.items()
-                                            if k not in drop}, max_nfev, "the pair's values")
+                                            if k not in drop}, max_nfev, "the pair's values",
+                          pair.start_state)
     if again is None or again.error(test) >= fits[best].error(test):
         return False
     fits[best] = again
@@ -324,7 +366,7 @@ def base_refit(fits, steps, fitting, max_nfev, notes, say) -> bool:
     best = fits[name]
     say(f"fitting the base model again from {name}'s values")
     again = fitting.start(None, {k: best.values[k] for k in fitting.params}, max_nfev,
-                          f"{name}'s values")
+                          f"{name}'s values", best.start_state)
     if again is None or again.error(fitting.test) >= steps[0].held_out:
         return False
     notes.append(f"base model fitted again from {name}'s values: held-out error "
