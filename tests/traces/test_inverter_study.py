@@ -21,14 +21,17 @@ PARAMS = {"Rpull": (20.0, 2.0, 200.0), "X1.Vout.V": (2.5, 0.2, 20.0),
 TRUTH = {"Rpull": 23.0, "X1.Vout.V": 2.0, "X2.Vout.V": 2.0}
 
 
-START = float(np.random.default_rng([1, 9]).uniform(0.0, 8.0))  # 5.44 s after switch-on
+def start_of(seed: int) -> float:
+    """When the recording of ``seed`` starts (s after switch-on): 5.44 s for seed 1,
+    4.08 s for seed 2."""
+    return float(np.random.default_rng([seed, 9]).uniform(0.0, 8.0))
 
 
-def diagnose(effects=None, own_clock=False, **hidden):
-    """The chain recorded from :data:`START` (with ``own_clock`` its time from 0 at the
-    first sample, else on the sources' clock), diagnosed."""
-    rec = inverter_record(START, 20.0, dt=0.02, noise=0.3, seed=1, Rpull=TRUTH["Rpull"],
-                          **hidden)
+def diagnose(effects=None, own_clock=False, seed=1, **hidden):
+    """The chain recorded from :func:`start_of` ``seed`` (with ``own_clock`` its time
+    from 0 at the first sample, else on the sources' clock), diagnosed."""
+    rec = inverter_record(start_of(seed), 20.0, dt=0.02, noise=0.3, seed=seed,
+                          Rpull=TRUTH["Rpull"], **hidden)
     if own_clock:
         rec["time_s"] = 0.02 * np.arange(len(rec))
     return diagnose_trace(NetlistBuilder("netlists/inverter.pn"), rec, PARAMS, node="out1",
@@ -84,7 +87,7 @@ def test_heat_exchange_in_out1s_volume_is_named_and_covered():
 
 @pytest.mark.study
 def test_a_tube_the_bent_base_fit_hides_is_named_from_its_second_start_on_the_loggers_clock():
-    """The control-line tube among four other tubes (-m study: ~2 min; the whole library
+    """The control-line tube among four other tubes (-m study: ~3 min; the whole library
     is the study_long test above), recorded on the logger's own clock (time from 0 at the
     first sample).  The base fit bends (R_pull 17, both volumes 4.2 mL for 23 and 2) and
     every candidate fitted from its screen point stays in its valley; from that bent fit
@@ -103,5 +106,33 @@ def test_a_tube_the_bent_base_fit_hides_is_named_from_its_second_start_on_the_lo
     assert starts[1]["start"]["R_tube@X2.Xv.ctrl"] > 2.0, starts  # not the bent fit's pick
     truth = {**TRUTH, "R_tube@X2.Xv.ctrl": 20.0, "V_tube@X2.Xv.ctrl": 1.0}
     assert all(covers(d, truth).values()), (covers(d, truth), d.report())
-    apart = (d.final.start_state.first_time - START) % 4.0  # the sources' period
+    apart = (d.final.start_state.first_time - start_of(1)) % 4.0  # the sources' period
+    assert min(apart, 4.0 - apart) < 1e-3
+
+
+@pytest.mark.study
+def test_a_loggers_clock_from_zero_on_a_record_far_from_rest_is_not_read_as_switch_on():
+    """The tube with another tube as a decoy (~1 min), recorded from 4.08 s after
+    switch-on on the logger's clock from 0, 84 ms off the sources' 4 s phase.  Without the
+    tube every phase misfits, the file's clock within 2× of the best phase's: it was kept
+    as a record from switch-on although the first samples are far from rest (out1 at 496
+    kPa), and the diagnosis said `unexplained` (131× the floor).  Read as a logger's
+    clock, the tube's fit then stopped half a sample off the clock's minimum (1.7×); from
+    its clock moved half a sample it reaches the floor, the base values and the tube's
+    R·V within 2 % of the truth, the tube's intervals covering.  The base parameters'
+    intervals are not asserted: on this record the least-squares optimum
+    itself, with the sources' clock given, is R_pull 22.83 and X2.Vout.V 2.014, about
+    2.4 standard errors from the truth (23 and 2), and the final fits end at its edge
+    (R_pull 22.80 [22.64, 22.96])."""
+    d = diagnose(tube_ctrl=(20.0, 1.0), effects=["tube@X1.Xv.ctrl", "tube@X2.Xv.ctrl"],
+                 own_clock=True, seed=2)
+    assert d.verdict == "explained" and d.accepted == ["tube@X2.Xv.ctrl"], d.report()
+    assert "no record from switch-on" in d.final.start_state.clock
+    assert d.waterfall.steps[-1].held_out < 1.1 * d.noise_floor
+    v = d.final.values
+    assert {k: v[k] for k in TRUTH} == pytest.approx(TRUTH, rel=0.02), d.report()
+    assert v["R_tube@X2.Xv.ctrl"] * v["V_tube@X2.Xv.ctrl"] == pytest.approx(20.0, rel=0.02)
+    tube = {"R_tube@X2.Xv.ctrl": 20.0, "V_tube@X2.Xv.ctrl": 1.0}  # R and V trade: wide
+    assert all(covers(d, tube).values()), (covers(d, tube), d.report())
+    apart = (d.final.start_state.first_time - start_of(2)) % 4.0
     assert min(apart, 4.0 - apart) < 1e-3
