@@ -7,11 +7,14 @@ switch at the wrong moments in the simulation: every fit misses by the whole swi
 
 For periodic sources (PULSE with a period, undamped SIN; several of them with a common
 period P) one simulation from rest through two periods gives the circuit's response at
-every phase.  The record's first period is compared with it at every phase on the
-sample grid (each signal in units of its own noise); the file's clock is kept when it
-gives the best phase or an rms misfit within :data:`CLOCK_SLACK` × the best phase's.
-Else the best phase is used, placed ⌈span/P⌉ periods after the sources' delay (a settled
-history of at least the record's length), and the start state says so.
+every phase.  The record's first period is compared with it at every start on the
+sample grid (each signal in units of its own noise): every phase of the settled cycle,
+and every time within one period of switch-on (a logger started just before the
+supply or the sources' first switching: no settled history).
+The file's clock is kept when it gives the best start or an rms misfit within
+:data:`CLOCK_SLACK` × the best start's.  Else the best start is used (a phase of the
+settled cycle placed ⌈span/P⌉ periods after the sources' delay, a history of at least
+the record's length), and the start state says so.
 
 That phase is found at the parameter guesses.  :func:`fit_clock` then fits the clock
 with the parameters (a last least-squares unknown: its shift in sample spacings), from
@@ -32,7 +35,7 @@ from ..core.lsq import least_squares_log
 from ..core.noise import record_sigma, segments
 
 #: the file's clock is kept unless its rms misfit is more than this factor of the best
-#: phase's: the user's clock stands unless the record contradicts it (a missing effect,
+#: start's: the user's clock stands unless the record contradicts it (a missing effect,
 #: such as a tube delaying a valve, moves the best phase too, but by a misfit ratio near 1;
 #: a logger's own clock misplaces the switching by tens of times the noise)
 CLOCK_SLACK = 2.0
@@ -90,7 +93,7 @@ def source_clock(circuit, data, origin: float,
     the sources' common period, s, 0 when none) for a recording ``data`` (time_s from
     0, p_<node>_kPa columns; the file's first time stamp ``origin``) of ``circuit`` (at
     the parameter guesses) driven by its sources; the file's clock is kept within
-    ``slack`` × the best phase's rms misfit."""
+    ``slack`` × the best start's rms misfit."""
     from .data import signal_of_column
     from .model import sample_at
 
@@ -131,35 +134,49 @@ def source_clock(circuit, data, origin: float,
 
     if not signals:
         return origin, "", period
-    # every phase on a grid of at most SCAN_POINTS, then zoomed in tenfold around the
-    # best until the grid is a FINER-th of a sample
-    step = max(dt, period / SCAN_POINTS)
-    phases = np.arange(0.0, period, step)
-    while True:
-        cost = misfit(settled + phases)
-        phase, least = float(phases[int(np.argmin(cost))]), float(np.min(cost))
-        if step <= dt / FINER * (1 + 1e-9):
-            break
-        width, step = step, max(step / 10, dt / FINER)
-        phases = phase + step * np.arange(-math.ceil(width / step), math.ceil(width / step) + 1)
-    phase %= period
-    # the file's clock: kept at the phase found (a record from switch-on is no settled
-    # cycle), else compared on the run from rest where it covers it, else at its phase
+
+    def best_start(first, width):
+        """(netlist start time, its misfit): every start in [first, first + width) on a
+        grid of at most SCAN_POINTS, then zoomed in tenfold around the best until the
+        grid is a FINER-th of a sample."""
+        step = max(dt, width / SCAN_POINTS)
+        starts = first + np.arange(0.0, width, step)
+        while True:
+            cost = misfit(starts)
+            best, least = float(starts[int(np.argmin(cost))]), float(np.min(cost))
+            if step <= dt / FINER * (1 + 1e-9):
+                return best, least
+            reach, step = step, max(step / 10, dt / FINER)
+            starts = best + step * np.arange(-math.ceil(reach / step),
+                                             math.ceil(reach / step) + 1)
+
+    # a settled cycle at any phase, or the run from switch-on within one period of it
+    # (a logger started just before the supply: no settled history)
+    phase, least = best_start(settled, period)
+    phase = (phase - settled) % period
+    early, least_early = best_start(0.0, period)
+    from_rest = least_early < least
+    least = min(least, least_early)
+    # the file's clock: kept at the start found, else compared on the run from rest
+    # where it covers it, else at its phase of the settled cycle
     apart = abs(phase - (origin - delay) % period)
-    if min(apart, period - apart) <= dt:
+    if (abs(early - origin) if from_rest else min(apart, period - apart)) <= dt:
         return origin, "", period
     direct = origin + t_w[-1] <= float(sol.t[-1])
     at_origin = origin if direct else settled + (origin - delay) % period
     at_file = float(misfit([at_origin])[0])
     if at_file <= slack ** 2 * least:
         return origin, "", period
-    offset = delay + phase + period * max(1, math.ceil(span / period))
     ratio = math.sqrt(at_file / least)
+    found = (f"{early:.4g} s after switch-on, within a period of it" if from_rest
+             else "on their settled cycle")
     note = (f"the file's clock puts the sources' switching {ratio:.3g}× further from the "
-            f"record than the best phase: the first sample's netlist time is estimated from "
-            f"the record (the sources repeat every {period:g} s; give a time offset to set "
-            f"it)")
-    return offset, note, period
+            f"record than the best start: the first sample's netlist time is estimated from "
+            f"the record, {found} (the sources repeat every {period:g} s; give a time offset "
+            f"to set it)")
+    if from_rest:
+        return early, note, period
+    return delay + phase + period * max(1, math.ceil(span / period)), note, period
 
 
 #: the name under which a clock estimated from the record is fitted with the parameters
