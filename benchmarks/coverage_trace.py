@@ -12,7 +12,10 @@ own start), 0.2–0.5 kPa of white noise:
 * ``driven``: the flow amplifier filling a 15–60 mL actuator through a 0.1–0.5
   kPa·s/mg line (netlists/amplifier.pn, valves switched by antiphase pulses every 5 s),
   recorded at 100 Hz for 30 s from a random time 0–20 s on the sources' clock, p_act
-  and p_muscle; fitted the line's R and the actuator's V.
+  and p_muscle; fitted the line's R and the actuator's V;
+* ``driven-own-clock``: the same recordings with the logger's own clock (time from 0 at
+  the first sample): the sources' phase is found from the record and fitted (each JSON
+  line's ``first_sample_off_ms``: how far it ends from the truth).
 
 Every recording is diagnosed (``diagnose_trace``: start state chosen automatically,
 candidates screened when the base model is not adequate).  Printed: per circuit the
@@ -20,8 +23,8 @@ share of 95 % intervals covering the truth (target 90–98 %), the mean interval
 against the spread of the estimates (|estimate − truth| / standard error: its rms is 1
 for honest widths), and the share of ``adequate`` verdicts (target ≥ 95 %).
 
-    python benchmarks/coverage_trace.py                      # 40 + 40 recordings (~25 min)
-    python benchmarks/coverage_trace.py --n 10 --circuit driven
+    python benchmarks/coverage_trace.py                      # 40 × 3 recordings (~35 min)
+    python benchmarks/coverage_trace.py --n 10 --circuit driven-own-clock
     options: --seed N, --out results.jsonl (one line per recording, appended)
 """
 from __future__ import annotations
@@ -75,7 +78,19 @@ def driven_case(rng):
             "muscle", {"start_s": start, "noise": noise})
 
 
-CIRCUITS = {"oscillator": oscillator_case, "driven": driven_case}
+def driven_own_clock_case(rng):
+    """The driven case with the logger's own clock: time counted from the first sample."""
+    rec, *rest = driven_case(rng)
+    rec["time_s"] -= rec["time_s"].iloc[0]
+    return (rec, *rest)
+
+
+CIRCUITS = {"oscillator": oscillator_case, "driven": driven_case,
+            "driven-own-clock": driven_own_clock_case}
+#: the driven circuit's sources' period, s (its first sample's phase is checked)
+DRIVEN_PERIOD = 10.0
+#: a circuit whose recordings are another's (the same random draws): one clock or the other
+SAME_RECORDINGS = {"driven-own-clock": "driven"}
 
 
 def run_one(kind, rng):
@@ -93,6 +108,9 @@ def run_one(kind, rng):
         rows[k] = {"truth": v, "estimate": float(fit.values[k]), "ci": [lo, hi],
                    "covered": bool(lo <= v <= hi),
                    "z": float(math.log(fit.values[k] / v) / se) if se > 0 else None}
+    if fit.start_state.driven:  # how far the first sample's netlist time is off, ms
+        off = (fit.start_state.first_time - info["start_s"]) % DRIVEN_PERIOD
+        info["first_sample_off_ms"] = 1e3 * min(off, DRIVEN_PERIOD - off)
     return {"circuit": kind, **info, "verdict": d.verdict, "accepted": d.accepted,
             "start": fit.start_state.mode, "params": rows, "wall_s": wall,
             "base_ratio": d.waterfall.steps[0].held_out / d.noise_floor}
@@ -130,7 +148,8 @@ def main(argv=None) -> None:
     args = ap.parse_args(argv)
     results = []
     for kind in args.circuit or list(CIRCUITS):
-        rng = np.random.default_rng([args.seed, list(CIRCUITS).index(kind)])
+        rng = np.random.default_rng([args.seed,
+                                     list(CIRCUITS).index(SAME_RECORDINGS.get(kind, kind))])
         for i in range(args.n):
             r = run_one(kind, rng)
             results.append(r)
@@ -138,7 +157,9 @@ def main(argv=None) -> None:
                              for k, p in r["params"].items())
             print(f"{kind} {i + 1}/{args.n}: start {r['start_s']:.1f} s ({r['start']}), "
                   f"{r['verdict']}, base {r['base_ratio']:.2f}× floor, {flags}, "
-                  f"{r['wall_s']:.1f} s", flush=True)
+                  + (f"first sample {r['first_sample_off_ms']:.2g} ms off, "
+                     if "first_sample_off_ms" in r else "")
+                  + f"{r['wall_s']:.1f} s", flush=True)
             if args.out:
                 with open(args.out, "a") as fh:
                     fh.write(json.dumps(r) + "\n")
