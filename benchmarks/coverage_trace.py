@@ -25,7 +25,8 @@ for honest widths), and the share of ``adequate`` verdicts (target ≥ 95 %).
 
     python benchmarks/coverage_trace.py                      # 40 × 3 recordings (~35 min)
     python benchmarks/coverage_trace.py --n 10 --circuit driven-own-clock
-    options: --seed N, --out results.jsonl (one line per recording, appended)
+    options: --seed N, --dt S (sample spacing), --out results.jsonl (one line per
+    recording, appended)
 """
 from __future__ import annotations
 
@@ -45,8 +46,9 @@ OSC_PARAMS = {"Rout": (1.4, 0.3, 5.0), "Rvent": (3.8, 0.5, 20.0), "V": (90.0, 5.
 DRIVEN_PARAMS = {"Rtube.R": (0.25, 0.02, 2.0), "Amck.V": (35.0, 5.0, 200.0)}
 
 
-def oscillator_case(rng):
-    """(recording, truth, fit parameters, build, cycle node)."""
+def oscillator_case(rng, dt=None):
+    """(recording, truth, fit parameters, build, cycle node, its draws), sampled every
+    ``dt`` s (default 0.05)."""
     from pneunet.design.circuits import oscillator
     from tests.traces.standalone import oscillator_record
 
@@ -55,7 +57,7 @@ def oscillator_case(rng):
                  "V": float(np.exp(rng.uniform(np.log(40.0), np.log(150.0))))}
         start = float(rng.uniform(5.0, 25.0))
         noise = float(rng.uniform(0.2, 0.5))
-        rec = oscillator_record(start + 30.0, dt=0.05, noise=noise,
+        rec = oscillator_record(start + 30.0, dt=dt or 0.05, noise=noise,
                                 seed=int(rng.integers(1 << 30)), **truth)
         rec = rec[rec["time_s"] >= start - 1e-9].reset_index(drop=True)
         if np.ptp(rec["p_tank_kPa"]) > 30.0:
@@ -64,7 +66,7 @@ def oscillator_case(rng):
     return rec, truth, OSC_PARAMS, oscillator, "tank", {"start_s": start, "noise": noise}
 
 
-def driven_case(rng):
+def driven_case(rng, dt=None):
     from pneunet.netlist.builder import NetlistBuilder
     from tests.traces.standalone_driven import amplifier_record
 
@@ -72,15 +74,16 @@ def driven_case(rng):
              "Amck.V": float(np.exp(rng.uniform(np.log(15.0), np.log(60.0))))}
     start = float(rng.uniform(0.0, 20.0))
     noise = float(rng.uniform(0.2, 0.5))
-    rec = amplifier_record(start, 30.0, dt=0.01, noise=noise, seed=int(rng.integers(1 << 30)),
+    dt = dt or 0.01
+    rec = amplifier_record(start, 30.0, dt=dt, noise=noise, seed=int(rng.integers(1 << 30)),
                            R_line=truth["Rtube.R"], V=truth["Amck.V"])
     return (rec, truth, DRIVEN_PARAMS, NetlistBuilder(str(ROOT / "netlists" / "amplifier.pn")),
             "muscle", {"start_s": start, "noise": noise})
 
 
-def driven_own_clock_case(rng):
+def driven_own_clock_case(rng, dt=None):
     """The driven case with the logger's own clock: time counted from the first sample."""
-    rec, *rest = driven_case(rng)
+    rec, *rest = driven_case(rng, dt)
     rec["time_s"] -= rec["time_s"].iloc[0]
     return (rec, *rest)
 
@@ -93,10 +96,10 @@ DRIVEN_PERIOD = 10.0
 SAME_RECORDINGS = {"driven-own-clock": "driven"}
 
 
-def run_one(kind, rng):
+def run_one(kind, rng, dt=None):
     from pneunet.truth.circuits import diagnose_trace
 
-    rec, truth, params, build, node, info = CIRCUITS[kind](rng)
+    rec, truth, params, build, node, info = CIRCUITS[kind](rng, dt)
     t0 = time.perf_counter()
     d = diagnose_trace(build, rec, params, node=node)
     wall = time.perf_counter() - t0
@@ -144,6 +147,8 @@ def main(argv=None) -> None:
     ap.add_argument("--n", type=int, default=40, help="recordings per circuit (40)")
     ap.add_argument("--circuit", choices=list(CIRCUITS), action="append", default=None)
     ap.add_argument("--seed", type=int, default=2026)
+    ap.add_argument("--dt", type=float, default=None,
+                    help="sample spacing, s (default 0.05 for the oscillator, 0.01 driven)")
     ap.add_argument("--out", default=None, help="append one JSON line per recording here")
     args = ap.parse_args(argv)
     results = []
@@ -151,7 +156,7 @@ def main(argv=None) -> None:
         rng = np.random.default_rng([args.seed,
                                      list(CIRCUITS).index(SAME_RECORDINGS.get(kind, kind))])
         for i in range(args.n):
-            r = run_one(kind, rng)
+            r = run_one(kind, rng, args.dt)
             results.append(r)
             flags = " ".join(f"{k}={'ok' if p['covered'] else 'MISS'}"
                              for k, p in r["params"].items())

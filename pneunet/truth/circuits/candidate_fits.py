@@ -213,7 +213,8 @@ def clock_restarts(fits, fitting, max_nfev, say) -> None:
     lowest cost on the fit window is kept.  An edge sharper than a sample puts a kink in
     the misfit each time a sample crosses it, and LM stops a fraction of a sample from
     the clock's minimum (the inverter chain's control-line tube, recorded from 4.08 s on
-    the logger's clock: 1.96× the floor; from its clock half a sample later, 1.29×)."""
+    the logger's clock: 1.74× the floor; from its clock half a sample earlier, 1.03×,
+    half a sample later 25×)."""
     test = fitting.test
     name = min((n for n in fits if n != "none"), key=lambda n: fits[n].error(test),
                default=None)

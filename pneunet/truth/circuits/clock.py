@@ -138,7 +138,7 @@ def source_clock(circuit, data, origin: float,
     def best_start(first, width):
         """(netlist start time, its misfit): every start in [first, first + width) on a
         grid of at most SCAN_POINTS, then zoomed in tenfold around the best until the
-        grid is a FINER-th of a sample."""
+        grid is a FINER-th of a sample (none before switch-on)."""
         step = max(dt, width / SCAN_POINTS)
         starts = first + np.arange(0.0, width, step)
         while True:
@@ -149,6 +149,7 @@ def source_clock(circuit, data, origin: float,
             reach, step = step, max(step / 10, dt / FINER)
             starts = best + step * np.arange(-math.ceil(reach / step),
                                              math.ceil(reach / step) + 1)
+            starts = starts[starts >= 0.0]
 
     # a settled cycle at any phase, or the run from switch-on within one period of it
     # (a logger started just before the supply: no settled history)
