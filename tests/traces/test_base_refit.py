@@ -24,15 +24,17 @@ class Fitting:
     def __init__(self, refit):
         self.refit, self.started = refit, []
 
-    def start(self, eff, x_start, max_nfev, kind):
-        self.started.append((eff, dict(x_start), max_nfev, kind))
+    def start(self, eff, x_start, max_nfev, kind, state=None):
+        self.started.append((eff, dict(x_start), max_nfev, kind, state))
         return self.refit
 
 
 def setup(refit_error):
-    fits = {"none": Fit(held_out=5.0, unit="kPa", values={"Rpull": 160.0, "V": 0.5}),
+    fits = {"none": Fit(held_out=5.0, unit="kPa", values={"Rpull": 160.0, "V": 0.5},
+                        start_state="base clock"),
             "tube@X1.in": Fit(held_out=0.31, unit="kPa",
-                              values={"Rpull": 23.0, "V": 3.5, "R_tube@X1.in": 0.03})}
+                              values={"Rpull": 23.0, "V": 3.5, "R_tube@X1.in": 0.03},
+                              start_state="the tube's fitted clock")}
     steps = [Step("base model", 5.0), Step("tube@X1.in", 0.31, effects=("tube@X1.in",))]
     refit = None if refit_error is None else Fit(held_out=refit_error, unit="kPa",
                                                    values={"Rpull": 23.0, "V": 3.5})
@@ -43,8 +45,10 @@ def test_a_base_fit_in_a_wrong_valley_is_replaced_and_the_effect_not_needed():
     fits, steps, fitting = setup(0.30)
     notes = []
     assert base_refit(fits, steps, fitting, 120, notes, print)
-    # started from the best model's base values only (not its effect's), the base budget
-    assert fitting.started == [(None, {"Rpull": 23.0, "V": 3.5}, 120, "tube@X1.in's values")]
+    # started from the best model's base values only (not its effect's) and its start
+    # state (its fitted clock), the base budget
+    assert fitting.started == [(None, {"Rpull": 23.0, "V": 3.5}, 120, "tube@X1.in's values",
+                                "the tube's fitted clock")]
     assert fits["none"] is fitting.refit and steps[0].held_out == 0.30
     assert decide(steps, 0.3) == ("adequate", [])
     assert "5 → 0.3 kPa" in notes[0]

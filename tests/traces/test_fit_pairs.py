@@ -16,19 +16,23 @@ class Fitting:
     def __init__(self, held_out, stopped=()):
         self.held_out, self.stopped, self.calls = held_out, set(stopped), []
 
-    def pair(self, effects, x_start, max_nfev, notes):
+    def pair(self, effects, x_start, max_nfev, notes, state=None):
+        """A pair starts from the best single's start state, a continuation from its
+        own fit's (the clock each fitted)."""
         second = effects[1].name
         again = x_start.get("from") == second
+        assert state == (f"a + {second}" if again else "a"), state
         self.calls.append((second, "continued" if again else "first"))
         err = x_start["err"] * 0.5 if again else self.held_out[second]
         stopped = second in self.stopped
         return SimpleNamespace(error=lambda window=None: err, effects=effects,
                                stopped_on_budget=lambda: stopped,
-                               values={"from": second, "err": err})
+                               values={"from": second, "err": err},
+                               start_state=f"a + {second}")
 
 
 def _run(fitting, *seconds):
-    best = SimpleNamespace(name="a", effects=(SimpleNamespace(name="a"),))
+    best = SimpleNamespace(name="a", effects=(SimpleNamespace(name="a"),), start_state="a")
     fits = {"a": best}
     steps = [Step("base model", 10.0), Step("a", 4.0, effects=("a",))]
     fit_pairs(fits, "a", [(SimpleNamespace(name=n), {}) for n in seconds], steps, fitting,
