@@ -1,0 +1,70 @@
+"""The issue-31 new user's recording, varied as users vary it: start time, sampling rate,
+noise, seed and the hidden dead volume.
+
+The oscillator of ``netlists/oscillator.pn`` with R_vent 3.5 (netlist: 3), a 200 mL tank
+and a hidden volume at ``out``, recorded from a stand-alone model
+(tests/traces/standalone.py: scipy's Radau on equations written out by hand) and cut to
+start mid-run, time from 0 at the first sample; diagnosed as the user did
+(``--fit Rout=1.4:0.3:5 --fit Rvent=3.8:0.5:20 --fit Vtank.V=250:50:600``). Expected:
+``explained`` by ``dead_volume@out``, the intervals covering R_vent, V and V_dead.
+
+    python benchmarks/study_new_user_recording.py            # every variant (~5 min)
+    python benchmarks/study_new_user_recording.py 3 4        # variants 3 and 4 only
+"""
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+#: (start s, sample spacing s, noise kPa, generator seed, hidden volume mL)
+VARIANTS = [
+    (8.0, 0.05, 0.3, 3, 3.0),  # the issue's recording
+    (3.0, 0.05, 0.3, 4, 3.0), (14.5, 0.05, 0.3, 5, 3.0), (21.3, 0.05, 0.4, 8, 2.0),
+    (11.0, 0.05, 0.3, 9, 5.0), (8.0, 0.05, 0.5, 7, 3.0), (8.0, 0.1, 0.3, 6, 3.0),
+    (8.0, 0.02, 0.3, 7, 3.0), (8.0, 0.02, 0.5, 7, 3.0), (8.0, 0.02, 0.5, 3, 3.0),
+    (12.0, 0.01, 0.3, 11, 3.0),
+]
+PARAMS = {"Rout": (1.4, 0.3, 5.0), "Rvent": (3.8, 0.5, 20.0), "Vtank.V": (250.0, 50.0, 600.0)}
+
+
+def run(start, dt, noise, seed, v_dead):
+    from pneunet.netlist.builder import NetlistBuilder
+    from pneunet.truth.circuits import diagnose_trace
+    from tests.traces.standalone import oscillator_record
+
+    rec = oscillator_record(start + 40.0, dt=dt, noise=noise, seed=seed, V=200.0, Rvent=3.5,
+                            V_out=v_dead)
+    rec = rec[rec["time_s"] >= start - 1e-9].reset_index(drop=True)
+    rec["time_s"] -= rec["time_s"].iloc[0]
+    t0 = time.perf_counter()
+    d = diagnose_trace(NetlistBuilder(str(ROOT / "netlists" / "oscillator.pn")), rec, PARAMS,
+                       node="tank")
+    wall = time.perf_counter() - t0
+    truth = {"Rvent": 3.5, "Vtank.V": 200.0, "V_dead@out": v_dead}
+    ci = d.final.ci
+    cover = ", ".join(f"{k} {'ok' if ci[k][0] <= v <= ci[k][1] else 'MISS'}"
+                      for k, v in truth.items() if k in ci)
+    steps = d.waterfall.steps
+    right = d.verdict == "explained" and d.accepted == ["dead_volume@out"]
+    return (f"| {start:g} | {1 / dt:g} | {noise:g} | {seed} | {v_dead:g} | {d.verdict} "
+            f"{', '.join(d.accepted)} | {steps[0].held_out / d.noise_floor:.2f} → "
+            f"{steps[-1].held_out / d.noise_floor:.2f} | {cover} | "
+            f"{'yes' if right else '**no**'} | {wall:.0f} |")
+
+
+def main(argv=None) -> None:
+    argv = sys.argv[1:] if argv is None else argv
+    picked = [VARIANTS[int(i)] for i in argv] if argv else VARIANTS
+    print("| start s | Hz | noise kPa | seed | V_dead mL | verdict | held-out / floor "
+          "| intervals | right | s |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for variant in picked:
+        print(run(*variant), flush=True)
+
+
+if __name__ == "__main__":
+    main()
