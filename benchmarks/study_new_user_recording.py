@@ -10,6 +10,8 @@ start mid-run, time from 0 at the first sample; diagnosed as the user did
 
     python benchmarks/study_new_user_recording.py            # every variant (~5 min)
     python benchmarks/study_new_user_recording.py 3 4        # variants 3 and 4 only
+    python benchmarks/study_new_user_recording.py --thin-to 25 7 8 9 10
+                        # every k-th row kept, k = round(rate / 25 Hz) (at least 1)
 """
 from __future__ import annotations
 
@@ -31,7 +33,7 @@ VARIANTS = [
 PARAMS = {"Rout": (1.4, 0.3, 5.0), "Rvent": (3.8, 0.5, 20.0), "Vtank.V": (250.0, 50.0, 600.0)}
 
 
-def run(start, dt, noise, seed, v_dead):
+def run(start, dt, noise, seed, v_dead, thin_to=None):
     from pneunet.netlist.builder import NetlistBuilder
     from pneunet.truth.circuits import diagnose_trace
     from tests.traces.standalone import oscillator_record
@@ -40,6 +42,8 @@ def run(start, dt, noise, seed, v_dead):
                             V_out=v_dead)
     rec = rec[rec["time_s"] >= start - 1e-9].reset_index(drop=True)
     rec["time_s"] -= rec["time_s"].iloc[0]
+    if thin_to:
+        rec = rec.iloc[::max(1, round(1.0 / (dt * thin_to)))].reset_index(drop=True)
     t0 = time.perf_counter()
     d = diagnose_trace(NetlistBuilder(str(ROOT / "netlists" / "oscillator.pn")), rec, PARAMS,
                        node="tank")
@@ -57,13 +61,19 @@ def run(start, dt, noise, seed, v_dead):
 
 
 def main(argv=None) -> None:
-    argv = sys.argv[1:] if argv is None else argv
-    picked = [VARIANTS[int(i)] for i in argv] if argv else VARIANTS
+    import argparse
+
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("variants", nargs="*", type=int, help="indices into VARIANTS (all)")
+    ap.add_argument("--thin-to", type=float, default=None,
+                    help="keep every k-th row, k = round(rate / this, Hz)")
+    args = ap.parse_args(argv)
+    picked = [VARIANTS[i] for i in args.variants] if args.variants else VARIANTS
     print("| start s | Hz | noise kPa | seed | V_dead mL | verdict | held-out / floor "
           "| intervals | right | s |")
     print("|---|---|---|---|---|---|---|---|---|---|")
     for variant in picked:
-        print(run(*variant), flush=True)
+        print(run(*variant, thin_to=args.thin_to), flush=True)
 
 
 if __name__ == "__main__":
