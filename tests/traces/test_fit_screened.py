@@ -10,8 +10,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from pneunet.truth.circuits.candidate_fits import (CLOCK_NUDGES, CONTINUATIONS, STAYED,
-                                                   fit_screened)
+from pneunet.truth.circuits.candidate_fits import CONTINUATIONS, STAYED, fit_screened
+from pneunet.truth.circuits.clock import CLOCK_NUDGES
 from pneunet.truth.circuits.initial_state import StartState
 from pneunet.truth.circuits.screen import SCREEN_KEEP
 

@@ -8,13 +8,12 @@ from the best model's values).  Used by
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 
 import numpy as np
 
 from ...common.errors import SolverError
 from ..core.verdict import Step, at_floor, indistinguishable
-from .clock import clock_unit
+from .clock import CLOCK_NUDGES, clock_moved, clock_unit
 from .data import compared_samples, signal_of_column
 from .fit import TraceFit, fit_trace, near_bound
 from .screen import SCREEN_KEEP, screen_candidates, step_starts
@@ -202,15 +201,12 @@ def continue_stopped(fits, fitting, max_nfev, say) -> None:
         fits[name] = again
 
 
-#: sample spacings the best candidate's fitted clock is moved for its other starts
-CLOCK_NUDGES = (-0.5, 0.5)
-
-
 def clock_restarts(fits, fitting, max_nfev, say) -> None:
     """The best fitted candidate, when it fitted the logger's clock with the parameters
     and stopped above the floor while improving on the base model, fitted again from its
-    values with the clock moved by each of :data:`CLOCK_NUDGES` sample spacings; the
-    lowest cost on the fit window is kept.  An edge sharper than a sample puts a kink in
+    values with the clock moved by each of
+    :data:`~pneunet.truth.circuits.clock.CLOCK_NUDGES` sample spacings; the lowest cost
+    on the fit window is kept.  An edge sharper than a sample puts a kink in
     the misfit each time a sample crosses it, and LM stops a fraction of a sample from
     the clock's minimum (the inverter chain's control-line tube, recorded from 4.08 s on
     the logger's clock: 1.74× the floor; from its clock half a sample earlier, 1.03×,
@@ -228,9 +224,8 @@ def clock_restarts(fits, fitting, max_nfev, say) -> None:
     step = clock_unit(state, fitting.df["time_s"].to_numpy(float))
     for k in CLOCK_NUDGES:
         say(f"fitting {name} again with its clock moved {k:+g} sample spacings")
-        moved = replace(state, time_offset=state.time_offset + k * step, clock_ci=())
         again = fitting.start(first.effects[0], dict(first.values), max_nfev,
-                              f"clock moved {k:+g} samples", moved)
+                              f"clock moved {k:+g} samples", clock_moved(state, k, step))
         if again is not None and again.error() < fits[name].error():
             fits[name] = again
 

@@ -277,10 +277,21 @@ def _clock_refound(model, values, df, state, step) -> float | None:
     return apart / step if abs(apart) > step else None
 
 
+#: sample spacings a fitted clock is moved for a fit's other starts where it stopped
+#: above the floor (:func:`~pneunet.truth.circuits.candidate_fits.clock_restarts`)
+CLOCK_NUDGES = (-0.5, 0.5)
+
+
+def clock_moved(state, shift, step):
+    """``state`` with its clock moved by ``shift`` sample spacings of ``step`` s (the
+    interval of a fitted clock dropped: it belongs to the clock before)."""
+    return replace(state, time_offset=state.time_offset + float(shift) * step, clock_ci=())
+
+
 def clock_fitted(state, shift, ci, step):
     """``state`` with the fitted clock: moved by ``shift`` sample spacings of ``step`` s,
     the first sample's netlist time and its interval (``ci``: the interval of exp(shift))."""
-    moved = replace(state, time_offset=state.time_offset + float(shift) * step)
+    moved = clock_moved(state, shift, step)
     lo, hi = (moved.first_time + (math.log(c) - float(shift)) * step if c > 0 else -math.inf
               for c in ci)
     return replace(moved, clock_ci=(lo, hi))
