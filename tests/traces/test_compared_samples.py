@@ -3,6 +3,7 @@ a pressure at a node with a volume is compared at every sample, its fastest edge
 included; around the jumps of a node without one (a valve output at a fold) and of a
 flow a few samples are left out."""
 import numpy as np
+import pytest
 
 from pneunet.netlist.builder import NetlistBuilder
 from pneunet.truth.circuits.data import JUMP_HALF_WIDTH
@@ -56,3 +57,49 @@ def test_the_screen_leaves_a_storage_nodes_edges_out_with_the_jacobians_rows():
     rows = np.concatenate([keep[s][fit.extras["keep"][s]] for s in data[1]])
     np.testing.assert_array_equal(jac, fit.extras["jacobian"][rows])
     assert jac.shape[0] == sum(int(k.sum()) for k in keep.values())
+
+
+def _edges(rate_hz):
+    """A valve output's two edges as loggers at ``rate_hz`` record them: a 360 kPa rise
+    and a 125 kPa fall, each a logistic of 8 ms width (a dead volume behind the valve),
+    the level drifting slowly between them."""
+    t = np.arange(0.0, 4.0, 1.0 / rate_hz)
+    rise = 360.0 / (1.0 + np.exp(-(t - 1.0) / 0.008))
+    fall = -125.0 / (1.0 + np.exp(-(t - 3.0) / 0.008))
+    return t, 96.0 + rise + fall + 3.0 * np.sin(t)
+
+
+@pytest.mark.parametrize("rate_hz", [20, 50, 100, 200, 1000])
+def test_an_algebraic_nodes_edge_is_left_out_whole_at_any_logger_rate(rate_hz):
+    """Where a valve output's recorded edge spans several samples (a fast logger), none
+    of its samples between 5 % and 95 % of the way is compared, the smaller fall too
+    (no single step of it is a quarter of the range); away from the edges (more than
+    four samples and 0.1 s) every sample is."""
+    t, y = _edges(rate_hz)
+    osc = TraceModel(NetlistBuilder("netlists/oscillator.pn"))
+    keep = compared_masks(osc, {}, {"p_out": y})["p_out"]
+    for t0 in (1.0, 3.0):
+        s = 1.0 / (1.0 + np.exp(-(t - t0) / 0.008))
+        assert not keep[(s > 0.05) & (s < 0.95)].any()
+    far = np.min(np.abs(t[:, None] - np.array([1.0, 3.0])), axis=1) > max(0.1, 4.0 / rate_hz)
+    assert keep[far].all()
+
+
+def test_the_filling_behind_a_junctions_jump_stays_compared():
+    """The amplifier's valve junction at 100 Hz: each switching moves it by a step (45 kPa
+    up, 19 down), then it follows the actuator filling or venting through the line,
+    10 kPa a sample at first.  The up-step is a jump and is left out (four samples), the
+    small down-step with the venting behind it is none; the filling and the venting are
+    compared."""
+    from .standalone_driven import amplifier_record
+
+    rec = amplifier_record(0.0, 30.0, dt=0.01, noise=0.3, seed=1)
+    y = rec["p_act_kPa"].to_numpy()
+    amp = TraceModel(NetlistBuilder("netlists/amplifier.pn"))
+    keep = compared_masks(amp, {}, {"p_act": y})["p_act"]
+    ups, downs = np.flatnonzero(np.diff(y) > 30.0), np.flatnonzero(np.diff(y) < -15.0)
+    assert len(ups) == 3 and len(downs) == 2
+    runs = np.flatnonzero(np.diff(np.r_[1, keep.astype(int), 1]) != 0).reshape(-1, 2)
+    np.testing.assert_array_equal(runs, np.column_stack([ups - 1, ups + 3]))
+    for i in np.r_[ups, downs]:
+        assert keep[i + 3:i + 60].all()

@@ -368,9 +368,10 @@ def refine_fit(res, fun: TraceResidual, lb, ub, max_nfev: int, pool):
 def compared_masks(model: TraceModel, values: dict, measured: dict) -> dict:
     """{signal: samples compared}: every sample of a pressure at a node the netlist gives
     a volume (its edges, however fast, are the model's to follow: they tell a resistance
-    from a volume); elsewhere all but those around a recorded jump
-    (:func:`~pneunet.truth.circuits.data.compared_samples`: an algebraic node jumps at a
-    valve's fold, where a few ms of timing would decide the error).  Decided on the
+    from a volume); elsewhere all but those around a recorded jump, within a sample or
+    over several (:func:`~pneunet.truth.circuits.data.compared_samples` with
+    ``whole_edges``: an algebraic node jumps at a valve's fold, where a few ms of timing
+    would decide the error).  Decided on the
     netlist without effects, so that every candidate is compared on the same samples."""
     from ...engine.assembly import CircuitDAE
 
@@ -378,7 +379,7 @@ def compared_masks(model: TraceModel, values: dict, measured: dict) -> dict:
     circuit.options = circuit.options.replace(dead_volume=0.0)
     stored = set(CircuitDAE(circuit).stored_pressure_nodes)
     return {s: np.ones(len(y), bool) if s.startswith("p_") and s[2:] in stored
-            else compared_samples(y) for s, y in measured.items()}
+            else compared_samples(y, whole_edges=True) for s, y in measured.items()}
 
 
 #: a fitted value this close to a bound of its range (in ln value: 1 %) stopped there
