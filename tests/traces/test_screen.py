@@ -5,6 +5,7 @@ fold jumps in 20 s)."""
 import math
 
 import numpy as np
+import pytest
 
 from pneunet.design.circuits import oscillator
 from pneunet.engine.circuit import Circuit
@@ -103,3 +104,34 @@ def test_a_point_its_cycle_does_not_recentre_takes_gauss_newton_steps(monkeypatc
     out = task()
     assert out["simulations"] == 1
     np.testing.assert_allclose(np.log([out["x"][k] for k in NAMES]), x_off, atol=1e-12)
+
+
+def test_the_screen_zooms_in_on_a_valley_narrower_than_its_grid(monkeypatch):
+    """A dead volume's grid is five points a factor 8.3 apart (1 mL, 8.3 mL, …); a
+    stand-in merit with a narrow valley at 3.36 mL, steeper towards larger volumes (as
+    the oscillator's at 50 Hz): the grid alone picks 1 mL, the zoom (spacing halved three
+    rounds, two points a round) ends within a factor 1.2 of the valley (its last round's
+    points are a factor 1.3 apart), every point
+    inside the range, each one simulation counted."""
+    from pneunet.truth.circuits import screen
+    from pneunet.truth.circuits.effects import DeadVolume
+
+    def merit(task):
+        u = math.log(task.point["V_dead@out"] / 3.36)
+        return {"x": dict(task.point), "rss": 500.0 + 3000.0 * u * u * (4.0 if u > 0 else 1.0),
+                "simulations": 1}
+
+    monkeypatch.setattr(ScreenTask, "__call__", merit)
+    eff = DeadVolume("out")
+    args = (["Rvent"], np.zeros(1), np.ones((3, 1)), {"Rvent": (3.0, 0.5, 20.0)}, None, None,
+            None)
+    row = screen.screen_candidates([eff], *args)[0]
+    assert row["x"]["V_dead@out"] == pytest.approx(1.0)
+    screen.zoom_rows([row], None)
+    assert abs(math.log(row["x"]["V_dead@out"] / 3.36)) < math.log(1.2)
+    assert row["task"].point == row["x"]
+    assert row["simulations"] == 5 + 3 * 2
+    # at the edge of its range a parameter's zoom stays inside it
+    lo, hi = eff.params["V_dead@out"][1:]
+    pts = screen.zoom_points(eff, {"V_dead@out": hi}, {"V_dead@out": 0.3})
+    assert [p["V_dead@out"] for p in pts] == [pytest.approx(hi * math.exp(-0.3))]

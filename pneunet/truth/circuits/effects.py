@@ -61,10 +61,20 @@ class CircuitEffect(ABC):
 
         import numpy as np
 
-        n = GRID_POINTS[min(len(self.params), len(GRID_POINTS)) - 1] if self.params else 0
+        n = self._grid_points()
         axes = [np.exp(np.log(lo) + (np.arange(n) + 0.5) / n * np.log(hi / lo))
                 for _, lo, hi in self.params.values()]
         return [dict(zip(self.params, map(float, point))) for point in itertools.product(*axes)]
+
+    def grid_steps(self) -> dict:
+        """{parameter: the spacing of :meth:`grid` along it, in ln value}."""
+        import math
+
+        return {k: math.log(hi / lo) / self._grid_points()
+                for k, (_, lo, hi) in self.params.items()}
+
+    def _grid_points(self) -> int:
+        return GRID_POINTS[min(len(self.params), len(GRID_POINTS)) - 1] if self.params else 0
 
     @abstractmethod
     def apply(self, circuit, values: dict) -> None:
