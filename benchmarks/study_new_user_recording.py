@@ -50,7 +50,8 @@ def run(start, dt, noise, seed, v_dead, thin_to=None):
     wall = time.perf_counter() - t0
     truth = {"Rvent": 3.5, "Vtank.V": 200.0, "V_dead@out": v_dead}
     ci = d.final.ci
-    cover = ", ".join(f"{k} {'ok' if ci[k][0] <= v <= ci[k][1] else 'MISS'}"
+    cover = ", ".join(f"{k} {'ok' if ci[k][0] <= v <= ci[k][1] else 'MISS'} "
+                      f"{d.final.values[k]:.3g} [{ci[k][0]:.3g}, {ci[k][1]:.3g}]"
                       for k, v in truth.items() if k in ci)
     steps = d.waterfall.steps
     right = d.verdict == "explained" and d.accepted == ["dead_volume@out"]
