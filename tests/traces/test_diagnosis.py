@@ -157,3 +157,37 @@ def test_a_candidate_whose_fit_fails_is_reported_not_a_crash(monkeypatch):
     row = next(r for r in j["ranking"] if r["effect"] == "dead_volume@out")
     assert row["held_out_rms"] is None and row["note"].startswith("fit failed: IDA stopped")
     assert row["status"] == "failed"
+
+
+def test_the_screens_simulations_are_all_counted(monkeypatch):
+    """``timing.screen_simulations`` counts every screening simulation: the grid's points,
+    their zoom and start steps, and the second starts' screens (here every fit fails, so
+    each candidate gets one).  Counted in this process (one worker)."""
+    from pneunet.common.errors import SolverError
+    from pneunet.truth.circuits import candidate_fits as module
+    from pneunet.truth.circuits.effects import DeadVolume
+    from pneunet.truth.circuits.screen import ScreenTask
+
+    counted = []
+    call, step = ScreenTask.__call__, ScreenTask.step
+
+    def counting_call(self):
+        out = call(self)
+        counted.append(out["simulations"])
+        return out
+
+    def counting_step(self, at):
+        values, calls = step(self, at)
+        counted.append(calls)
+        return values, calls
+
+    def failing(*args, **kwargs):
+        raise SolverError("IDA stopped at t = 10 s", time=10.0)
+
+    monkeypatch.setattr(ScreenTask, "__call__", counting_call)
+    monkeypatch.setattr(ScreenTask, "step", counting_step)
+    monkeypatch.setattr(module.CandidateFits, "_fit", failing)
+    d = diagnose_trace(oscillator, oscillator_record(12.0, noise=0.4, seed=1, V_out=1.5),
+                       PARAMS, node="tank", effects=[DeadVolume("out")], workers=1)
+    assert len(counted) > 5 + 2 * 3  # the grid, at least the first zoom's rounds, a step
+    assert d.timing["screen_simulations"] == sum(counted)

@@ -33,7 +33,7 @@ class CandidateFits:
         self.starts = {}  # effect name -> [{start values, held-out rms, simulations}]
         #: the screen's (names, Jacobian, model arguments, data), once it has run
         self.screen_setup = None
-        self.screen_simulations = 0  # simulations of the screens second starts ran
+        self.screen_simulations = 0  # simulations of second starts' and second effects' screens
 
     def _fit(self, effs, x_start, max_nfev, refined=False, state=None):
         p = {k: (float(np.clip(self.base.values[k], lo, hi)), lo, hi)
@@ -284,6 +284,7 @@ def second_effects(fits, best, fitted, cand, params, fitting, model_setup, df, t
                               "state": first.start_state}),
             data, pool, on_top=first.effects)
         step_starts(rows[:1], pool)
+        fitting.screen_simulations += sum(r["simulations"] for r in rows)
         if math.isfinite(rows[0]["rss"]):
             out.append((rows[0]["effect"], rows[0]["x"]))
     usable = [n for n in fitted[1:] if not at_bound(fits[n])]

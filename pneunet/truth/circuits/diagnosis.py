@@ -270,11 +270,9 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
                                      pool)
             fitting.screen_setup = (names, jac, model_args, data_fit)
             timing["screen_s"] = time.perf_counter() - t0
-            timing["screen_simulations"] = sum(r["simulations"] for r in rows)
             t0 = time.perf_counter()
             fit_screened(rows, fits, fitting, screen, 4 * max_nfev, say)
             timing["candidate_fits_s"] = time.perf_counter() - t0
-            timing["screen_simulations"] += fitting.screen_simulations
             fitted = sorted((n for n in fits if n != "none"), key=lambda n: fits[n].error(test))
             fitted, alike = parsimonious_first(fitted, fits, test, floor, tolerance)
             if alike:
@@ -341,6 +339,9 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
         if pool is not None:
             pool.shutdown()
     timing["total_s"] = time.perf_counter() - wall
+    if "screen_s" in timing:  # the grid's points, their zoom and start steps, later screens
+        timing["screen_simulations"] = sum(r["simulations"] for r in rows) \
+            + fitting.screen_simulations
     # every fit tried, kept or not (the screen's are in screen_simulations)
     timing["simulations"] = sum(f.extras.get("simulations", 0) for n, f in fits.items()
                                 if n == "none" or " + " in n) \
