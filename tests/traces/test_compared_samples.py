@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from pneunet.netlist.builder import NetlistBuilder
-from pneunet.truth.circuits.data import JUMP_HALF_WIDTH
+from pneunet.truth.circuits.data import JUMP_HALF_WIDTH, compared_samples
 from pneunet.truth.circuits.fit import compared_masks
 from pneunet.truth.circuits.model import TraceModel
 
@@ -86,20 +86,51 @@ def test_an_algebraic_nodes_edge_is_left_out_whole_at_any_logger_rate(rate_hz):
 
 
 def test_the_filling_behind_a_junctions_jump_stays_compared():
-    """The amplifier's valve junction at 100 Hz: each switching moves it by a step (45 kPa
-    up, 19 down), then it follows the actuator filling or venting through the line,
-    10 kPa a sample at first.  The up-step is a jump and is left out (four samples), the
-    small down-step with the venting behind it is none; the filling and the venting are
-    compared."""
+    """The edge rule of an autonomous circuit on a junction like the amplifier's at
+    100 Hz: each switching moves it by a step (45 kPa up, 19 down), then it follows the
+    actuator filling or venting through the line, 10 kPa a sample at first.  The up-step
+    is a jump and is left out (four samples), the small down-step with the venting
+    behind it is none; the filling and the venting are compared."""
     from .standalone_driven import amplifier_record
 
     rec = amplifier_record(0.0, 30.0, dt=0.01, noise=0.3, seed=1)
     y = rec["p_act_kPa"].to_numpy()
     amp = TraceModel(NetlistBuilder("netlists/amplifier.pn"))
-    keep = compared_masks(amp, {}, {"p_act": y})["p_act"]
+    keep = compared_masks(amp, {}, {"p_act": y}, autonomous=True)["p_act"]
     ups, downs = np.flatnonzero(np.diff(y) > 30.0), np.flatnonzero(np.diff(y) < -15.0)
     assert len(ups) == 3 and len(downs) == 2
     runs = np.flatnonzero(np.diff(np.r_[1, keep.astype(int), 1]) != 0).reshape(-1, 2)
     np.testing.assert_array_equal(runs, np.column_stack([ups - 1, ups + 3]))
     for i in np.r_[ups, downs]:
         assert keep[i + 3:i + 60].all()
+
+
+def test_a_driven_circuits_edges_spread_over_samples_are_compared():
+    """In a circuit driven by its sources the sources decide when a valve switches: the
+    fit compares the amplifier's junction on every sample but those around a jump within
+    one sample.  With a 6 mL dead volume between the valves its 50 kPa jump spreads over
+    two samples at 100 Hz (32 and 16 kPa) and is compared: that is where the volume
+    shows.  The oscillator's valve output, whose switching its own state decides, is
+    left out over its whole edges (the same fit's rule)."""
+    from pneunet.truth.circuits import fit_trace
+
+    from .standalone import oscillator_record
+    from .standalone_driven import amplifier_record
+
+    rec = amplifier_record(3.0, 12.0, dt=0.01, noise=0.3, seed=1, V_act=6.0, R_line=0.24,
+                           V=30.0)
+    fit = fit_trace(NetlistBuilder("netlists/amplifier.pn"), rec,
+                    {"Rtube.R": (0.24, 0.02, 2.0), "Amck.V": (30.0, 5.0, 200.0)},
+                    node="muscle", max_nfev=2)
+    y = rec["p_act_kPa"].to_numpy()
+    assert not compared_samples(y, whole_edges=True).all()  # an autonomous one's rule
+    assert fit.start_state.driven and fit.extras["keep"]["p_act"].all()
+    osc = oscillator_record(12.0, dt=0.02, noise=0.3, seed=1, V_out=3.0)
+    fit = fit_trace(NetlistBuilder("netlists/oscillator.pn"), osc,
+                    {"Rvent": (3.0, 0.5, 20.0)}, node="tank", max_nfev=2)
+    y = osc["p_out_kPa"].to_numpy()
+    assert not fit.start_state.driven
+    np.testing.assert_array_equal(fit.extras["keep"]["p_out"],
+                                  compared_masks(TraceModel(NetlistBuilder(
+                                      "netlists/oscillator.pn")), {}, {"p_out": y})["p_out"])
+    assert (~fit.extras["keep"]["p_out"]).sum() > (~compared_samples(y)).sum()

@@ -265,7 +265,7 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
     x0 = np.log([params[k][0] for k in names])
     lb = np.log([params[k][1] for k in names])
     ub = np.log([params[k][2] for k in names])
-    keep_all = compared_masks(model, guess, meas)
+    keep_all = compared_masks(model, guess, meas, autonomous=not state.driven)
     unit, scales = residual_scales(meas, keep_all)
     t_fit = times[mask]
     aligned = None
@@ -365,21 +365,27 @@ def refine_fit(res, fun: TraceResidual, lb, ub, max_nfev: int, pool):
     return replace(again, nfev=res.nfev + again.nfev), finer, model
 
 
-def compared_masks(model: TraceModel, values: dict, measured: dict) -> dict:
+def compared_masks(model: TraceModel, values: dict, measured: dict,
+                   autonomous: bool = True) -> dict:
     """{signal: samples compared}: every sample of a pressure at a node the netlist gives
     a volume (its edges, however fast, are the model's to follow: they tell a resistance
-    from a volume); elsewhere all but those around a recorded jump, within a sample or
-    over several (:func:`~pneunet.truth.circuits.data.compared_samples` with
-    ``whole_edges``: an algebraic node jumps at a valve's fold, where a few ms of timing
-    would decide the error).  Decided on the
-    netlist without effects, so that every candidate is compared on the same samples."""
+    from a volume); elsewhere all but those around a recorded jump
+    (:func:`~pneunet.truth.circuits.data.compared_samples`: an algebraic node jumps at a
+    valve's fold, where a few ms of timing would decide the error).  In an
+    ``autonomous`` circuit the model's own state decides when a valve switches, and a
+    jump is left out whole however many samples a fast logger spreads it over
+    (``whole_edges``); in one driven by its sources they decide it, and only a jump
+    within a sample is left out: an edge spread over samples is compared (a dead volume
+    between the amplifier's valves shows there: 6 mL spreads the junction's 50 kPa jump
+    over two samples at 100 Hz).  Decided on the netlist without effects, so that every
+    candidate is compared on the same samples."""
     from ...engine.assembly import CircuitDAE
 
     circuit = model.base_circuit(values)
     circuit.options = circuit.options.replace(dead_volume=0.0)
     stored = set(CircuitDAE(circuit).stored_pressure_nodes)
     return {s: np.ones(len(y), bool) if s.startswith("p_") and s[2:] in stored
-            else compared_samples(y, whole_edges=True) for s, y in measured.items()}
+            else compared_samples(y, whole_edges=autonomous) for s, y in measured.items()}
 
 
 #: a fitted value this close to a bound of its range (in ln value: 1 %) stopped there
