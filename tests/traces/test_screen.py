@@ -135,3 +135,28 @@ def test_the_screen_zooms_in_on_a_valley_narrower_than_its_grid(monkeypatch):
     lo, hi = eff.params["V_dead@out"][1:]
     pts = screen.zoom_points(eff, {"V_dead@out": hi}, {"V_dead@out": 0.3})
     assert [p["V_dead@out"] for p in pts] == [pytest.approx(hi * math.exp(-0.3))]
+
+
+def test_a_second_start_is_the_anchored_screens_grid_point_not_zoomed(monkeypatch):
+    """The second start is another kind of start than the first: the screen anchored at
+    the user's guesses, at its best grid point, not zoomed in on (the inverter chain's
+    control-line tube reaches the floor only from there).  Stand-in merit as above."""
+    from types import SimpleNamespace
+
+    from pneunet.truth.circuits.candidate_fits import CandidateFits
+    from pneunet.truth.circuits.effects import DeadVolume
+
+    def merit(task):
+        u = math.log(task.point["V_dead@out"] / 3.36)
+        return {"x": dict(task.point), "rss": 500.0 + 3000.0 * u * u, "simulations": 1}
+
+    monkeypatch.setattr(ScreenTask, "__call__", merit)
+    eff = DeadVolume("out")
+    params = {"Rvent": (3.0, 0.5, 20.0)}
+    fitting = CandidateFits(None, None, params, None, None, None, None,
+                            SimpleNamespace(values={"Rvent": 3.2}), None, {}, "trace", None,
+                            0.3, 1.5)
+    fitting.screen_setup = (["Rvent"], np.ones((3, 1)), None, None)
+    start = fitting.second_start({"effect": eff, "x": {"V_dead@out": 1.0}})
+    assert start["V_dead@out"] in [p["V_dead@out"] for p in eff.grid()]
+    assert fitting.screen_simulations == len(eff.grid())

@@ -16,7 +16,7 @@ from ..core.verdict import Step, at_floor, indistinguishable
 from .clock import CLOCK_NUDGES, clock_moved, clock_unit
 from .data import compared_samples, signal_of_column
 from .fit import TraceFit, fit_trace, near_bound
-from .screen import SCREEN_KEEP, screen_candidates, step_starts, zoom_rows
+from .screen import SCREEN_KEEP, screen_candidates, step_starts
 
 
 class CandidateFits:
@@ -67,9 +67,11 @@ class CandidateFits:
 
     def second_start(self, row) -> dict:
         """Start values of the second fit of a screened candidate (``row``): the base
-        parameters at the user's guesses and the effect's point that fits best from
-        there (its screen again, anchored at the guesses, zoomed in on as a first start's
-        is, :func:`~pneunet.truth.circuits.screen.zoom_rows`): a base fit bent to
+        parameters at the user's guesses and the effect's grid point that fits best
+        from there (its screen again, anchored at the guesses; not zoomed in on as the
+        first start is: another kind of start, the inverter chain's control-line tube
+        reaches the floor only from its grid point, from the zoomed one it stops at
+        10× the floor): a base fit bent to
         mimic the missing effect misranks the effect's points (the inverter chain's
         control-line tube: from the bent fit its smallest point ranks first, from the
         guesses the one nearest the truth).  Without a screen, or where it fails, the
@@ -81,7 +83,6 @@ class CandidateFits:
             x_guess = np.log([guesses[k] for k in names])
             again = screen_candidates([eff], names, x_guess, jac, self.params, model_args,
                                       data, self.pool)[0]
-            zoom_rows([again], self.pool)
             self.screen_simulations += again["simulations"]
             if math.isfinite(again["rss"]):
                 return dict(again["x"])
