@@ -11,6 +11,9 @@ Each recording comes from a model written out by hand and integrated by scipy
   actuator through a 0.24 kPa·s/mg line (the netlist says 0.2), both valves switched by
   antiphase pulses every 5 s, recorded at 100 Hz for 30 s from a random time 0–20 s on
   the sources' clock, p_act and p_muscle, 0.3 kPa noise.  Fitted the line's R and V.
+  With ``--once`` its pulses switch once (netlists/amplifier_once.pn: inflated at 5 s,
+  deflated at 10 s), 15 s recorded from a random time 0–9 s.  ``--own-clock``: the
+  driven cases' time column restarted at 0 (the logger's own clock).
 * ``inverter`` cases: the chain of two inverters (netlists/inverter.pn; generator
   tests/traces/standalone_inverter.py) with R_pull 23 kPa·s/mg (the netlist says 20),
   the first gate's control a 4 s PULSE, recorded at 50 Hz for 20 s from a random time
@@ -24,6 +27,7 @@ Every registered circuit effect is a candidate.
     python benchmarks/study_trace_diagnosis.py --mid-run       # the same, started mid-run
     python benchmarks/study_trace_diagnosis.py --driven        # the driven circuit's cases
     python benchmarks/study_trace_diagnosis.py --inverter      # the inverter chain's cases
+    python benchmarks/study_trace_diagnosis.py --driven --once --own-clock
     python benchmarks/study_trace_diagnosis.py clean side      # some cases
     options: --seed N
 """
@@ -94,15 +98,19 @@ def oscillator_case(name, seed, mid_run):
     return rec, oscillator, PARAMS, "tank", expected, start
 
 
-def driven_case(name, seed):
+def driven_case(name, seed, once=False):
+    """The amplifier's case ``name``; ``once``: its pulses switch once
+    (netlists/amplifier_once.pn), 15 s recorded from 0–9 s after switch-on."""
     from pneunet.netlist.builder import NetlistBuilder
     from tests.traces.standalone_driven import amplifier_record
 
     kw, expected = DRIVEN[name]
-    start = float(np.random.default_rng([seed, 8]).uniform(0.0, 20.0))
-    rec = amplifier_record(start, 30.0, dt=0.01, noise=0.3, seed=seed,
-                           R_line=DRIVEN_TRUTH["Rtube.R"], V=DRIVEN_TRUTH["Amck.V"], **kw)
-    return (rec, NetlistBuilder(str(ROOT / "netlists" / "amplifier.pn")), DRIVEN_PARAMS,
+    start = float(np.random.default_rng([seed, 8]).uniform(0.0, 9.0 if once else 20.0))
+    rec = amplifier_record(start, 15.0 if once else 30.0, dt=0.01, noise=0.3, seed=seed,
+                           R_line=DRIVEN_TRUTH["Rtube.R"], V=DRIVEN_TRUTH["Amck.V"],
+                           once=once, **kw)
+    netlist = "amplifier_once.pn" if once else "amplifier.pn"
+    return (rec, NetlistBuilder(str(ROOT / "netlists" / netlist)), DRIVEN_PARAMS,
             "muscle", expected, start)
 
 
@@ -151,6 +159,8 @@ def main(argv=None) -> None:
     ap.add_argument("--mid-run", action="store_true", help="oscillator logger started mid-run")
     ap.add_argument("--driven", action="store_true", help="the driven amplifier's cases")
     ap.add_argument("--inverter", action="store_true", help="the inverter chain's cases")
+    ap.add_argument("--once", action="store_true",
+                    help="driven cases: pulses that switch once (netlists/amplifier_once.pn)")
     ap.add_argument("--own-clock", action="store_true",
                     help="driven cases: the logger's own clock (time_s from 0), not the sources'")
     args = ap.parse_args(argv)
@@ -166,7 +176,8 @@ def main(argv=None) -> None:
         if args.inverter:
             rec, build, params, node, expected, start = inverter_case(name, args.seed)
         elif args.driven:
-            rec, build, params, node, expected, start = driven_case(name, args.seed)
+            rec, build, params, node, expected, start = driven_case(name, args.seed,
+                                                                    args.once)
         else:
             rec, build, params, node, expected, start = oscillator_case(name, args.seed,
                                                                         args.mid_run)
@@ -191,11 +202,13 @@ def main(argv=None) -> None:
 
 def _phase(d, start, build) -> str:
     """How far the first sample's netlist time lies from the logger's true start, in ms
-    modulo the period of the netlist's sources."""
+    (modulo the period of the netlist's sources where they have one)."""
     from pneunet.truth.circuits.clock import common_period, varying_waveforms
 
     circuit = build({})
     period = common_period(varying_waveforms(circuit, start, start + 100.0))
+    if period is None:  # sources that change once
+        return f"{abs(d.final.start_state.first_time - start) * 1e3:.2g} ms off"
     apart = (d.final.start_state.first_time - start) % period
     return f"{min(apart, period - apart) * 1e3:.2g} ms off"
 

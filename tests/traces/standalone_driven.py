@@ -30,6 +30,7 @@ MIRROR_BACKWARD = {"Rf": 0.395, "pclose": 19.52, "ptrans": 93.44, "e": 1.62, "ai
 
 DEFAULTS = {"pH": 289.0, "pL": 120.0, "ambient": 96.0, "pc_hi": 496.0, "pc_lo": 96.0,
             "T": 10.0, "R_line": 0.2, "V": 30.0, "p0": 120.0, "V_act": 1e-4,
+            "once": False,         # the pulses switch once (no period): one inflation at T/2
             # hidden effects (None: absent)
             "heat_tau": None,      # energy balance in the actuator, hA = m(200 kPa)·c_v/τ
             "tube_ctrl": None,     # (R, V): tube from the in-valve's control source
@@ -97,8 +98,9 @@ def amplifier_record(t_start=0.0, duration=30.0, dt=0.01, noise=0.3, seed=0,
     (see :data:`DEFAULTS`)."""
     p = dict(DEFAULTS, **kw)
     T = p["T"]
-    c_in = (p["pc_hi"], p["pc_lo"], T / 2, 0.01, 0.01, T / 2 - 0.01, T)
-    c_out = (p["pc_lo"], p["pc_hi"], T / 2, 0.01, 0.01, T / 2 - 0.01, T)
+    period = np.inf if p["once"] else T
+    c_in = (p["pc_hi"], p["pc_lo"], T / 2, 0.01, 0.01, T / 2 - 0.01, period)
+    c_out = (p["pc_lo"], p["pc_hi"], T / 2, 0.01, 0.01, T / 2 - 0.01, period)
     idx = {"act": 0, "muscle": 1}
     for key, state in (("heat_tau", "T"), ("tube_ctrl", "ctrl")):
         if p[key] is not None:
@@ -151,7 +153,8 @@ def amplifier_record(t_start=0.0, duration=30.0, dt=0.01, noise=0.3, seed=0,
     if "ctrl" in idx:
         y0[idx["ctrl"]] = c_in[0]
     t_end = t_start + duration
-    breaks = sorted({0.0, t_end} | {b for k in range(int(t_end / T) + 1)
+    cycles = 1 if p["once"] else int(t_end / T) + 1
+    breaks = sorted({0.0, t_end} | {b for k in range(cycles)
                                     for b in (k * T + T / 2, k * T + T / 2 + 0.01,
                                               k * T + T, k * T + T + 0.01) if 0 < b < t_end})
     times = np.arange(t_start, t_end + 1e-9, dt)

@@ -16,6 +16,10 @@ The file's clock is kept when it gives the best start or an rms misfit within
 settled cycle placed ⌈span/P⌉ periods after the sources' delay, a history of at least
 the record's length), and the start state says so.
 
+Sources that change once (a STEP, a PULSE without a period, a PWL) are placed the same
+way by the change the record shows (:func:`_one_shot_clock`): every start from a record's
+length before the first change to one after the last, the whole record compared.
+
 That phase is found at the parameter guesses.  :func:`fit_clock` then fits the clock
 with the parameters (a last least-squares unknown: its shift in sample spacings), from
 that phase and from a sample either way where the first fit is not at the record's
@@ -87,75 +91,57 @@ def varying_waveforms(circuit, t0: float, t1: float) -> list:
     return out
 
 
+def source_changes(circuit) -> tuple[float, float] | None:
+    """(first, last) netlist times (s) at which ``circuit``'s sources change, when every
+    source that changes does so a finite number of times (a STEP, a PULSE without a
+    period, a PWL); None when one repeats or is not known in closed form (a periodic
+    PULSE, a SIN, a Python function), or when none changes."""
+    from ...physics.waveforms import Constant, PiecewiseLinear, Pulse, Step, Waveform
+
+    corners = []
+    for spec in circuit.elements.values():
+        for v in spec.params.values():
+            if not isinstance(v, Waveform) or isinstance(v, Constant):
+                continue
+            if not (isinstance(v, (Step, PiecewiseLinear)) or
+                    (isinstance(v, Pulse) and not v.period > 0)):
+                return None
+            ts = np.asarray(v.breakpoints(-math.inf, math.inf), float)
+            if ts.size and np.ptp([float(v.value(x)) for x in (ts[0] - 1, *ts, ts[-1] + 1)]):
+                corners.extend(ts)
+    return (float(min(corners)), float(max(corners))) if corners else None
+
+
 def source_clock(circuit, data, origin: float,
                  slack: float = CLOCK_SLACK) -> tuple[float, str, float]:
     """(netlist time of the first sample, s; a note, '' when the file's clock is kept;
-    the sources' common period, s, 0 when none) for a recording ``data`` (time_s from
-    0, p_<node>_kPa columns; the file's first time stamp ``origin``) of ``circuit`` (at
-    the parameter guesses) driven by its sources; the file's clock is kept within
-    ``slack`` × the best start's rms misfit."""
-    from .data import signal_of_column
-    from .model import sample_at
-
+    the range of the clock, s: the sources' common period, for sources that change once
+    twice the starts scanned, 0 when neither) for a recording ``data`` (time_s from 0,
+    p_<node>_kPa columns; the file's first time stamp ``origin``) of ``circuit`` (at the
+    parameter guesses) driven by its sources; the file's clock is kept within ``slack``
+    × the best start's rms misfit."""
     times = data["time_s"].to_numpy(float)
     span = float(times[-1]) if len(times) else 0.0
     waves = varying_waveforms(circuit, origin, origin + span)
-    period = common_period(waves)
-    if period is None or len(times) < 10:
+    period = common_period(waves) if waves else None
+    changes = None if period else source_changes(circuit)
+    if (period is None and changes is None) or len(times) < 10:
         return origin, "", 0.0
-    delay = max(float(getattr(w, "delay", 0.0)) for w in waves)
     dt = float(np.median(np.diff(times)))
+    if changes is not None:
+        return _one_shot_clock(circuit, data, origin, slack, changes, dt)
+    delay = max(float(getattr(w, "delay", 0.0)) for w in waves)
     window = times <= min(span, period)
-    t_w = times[window]
-    cols = [c for c in data.columns if c != "time_s"]
     # output finer than the samples: the phase is refined between them
-    sol = circuit.tran(delay + 2 * period + t_w[-1] + dt, t_step=dt / FINER)
-    settled = delay + period  # netlist time of phase 0 one period into the cycle
-    signals = []
-    for c in cols:
-        s = signal_of_column(c)
-        if s not in sol.signals:
-            continue
-        y = data[c].to_numpy(float)[window]
-        ok = np.isfinite(y)
-        ok[np.arange(len(ok)) % max(1, len(ok) // SCAN_POINTS) != 0] = False
-        scale = record_sigma(data[c].to_numpy(float))
-        scale = scale if math.isfinite(scale) and scale > 0 else max(float(np.ptp(y[ok])), 1.0)
-        signals.append((np.asarray(sol[s], float), y[ok], t_w[ok], scale))
-
-    def misfit(starts):
-        """Σ over signals of ((simulated − recorded)/noise)² for each netlist start time."""
-        total = np.zeros(len(starts))
-        for model, y, t, scale in signals:
-            at = np.asarray(starts, float)[:, None] + t[None, :]
-            sim = sample_at(sol.t, model, at.ravel()).reshape(at.shape)
-            total += np.sum(((sim - y) / scale) ** 2, axis=1)
-        return total
-
-    if not signals:
+    scan = _Scan(circuit, data, window, delay + 2 * period + times[window][-1] + dt, dt)
+    if not scan.signals:
         return origin, "", period
-
-    def best_start(first, width):
-        """(netlist start time, its misfit): every start in [first, first + width) on a
-        grid of at most SCAN_POINTS, then zoomed in tenfold around the best until the
-        grid is a FINER-th of a sample (none before switch-on)."""
-        step = max(dt, width / SCAN_POINTS)
-        starts = first + np.arange(0.0, width, step)
-        while True:
-            cost = misfit(starts)
-            best, least = float(starts[int(np.argmin(cost))]), float(np.min(cost))
-            if step <= dt / FINER * (1 + 1e-9):
-                return best, least
-            reach, step = step, max(step / 10, dt / FINER)
-            starts = best + step * np.arange(-math.ceil(reach / step),
-                                             math.ceil(reach / step) + 1)
-            starts = starts[starts >= 0.0]
-
+    settled = delay + period  # netlist time of phase 0 one period into the cycle
     # a settled cycle at any phase, or the run from switch-on within one period of it
     # (a logger started just before the supply: no settled history)
-    phase, least = best_start(settled, period)
+    phase, least = scan.best_start(settled, period)
     phase = (phase - settled) % period
-    early, least_early = best_start(0.0, period)
+    early, least_early = scan.best_start(0.0, period)
     from_rest = least_early < least
     least = min(least, least_early)
     # the file's clock: kept at the start found, else compared on the run from rest
@@ -163,9 +149,9 @@ def source_clock(circuit, data, origin: float,
     apart = abs(phase - (origin - delay) % period)
     if (abs(early - origin) if from_rest else min(apart, period - apart)) <= dt:
         return origin, "", period
-    direct = origin + t_w[-1] <= float(sol.t[-1])
+    direct = origin + scan.t_w[-1] <= scan.t_end
     at_origin = origin if direct else settled + (origin - delay) % period
-    at_file = float(misfit([at_origin])[0])
+    at_file = float(scan.misfit([at_origin])[0])
     if at_file <= slack ** 2 * least:
         return origin, "", period
     ratio = math.sqrt(at_file / least)
@@ -180,6 +166,87 @@ def source_clock(circuit, data, origin: float,
     return delay + phase + period * max(1, math.ceil(span / period)), note, period
 
 
+def _one_shot_clock(circuit, data, origin, slack, changes, dt):
+    """:func:`source_clock` for sources that change only between netlist times
+    ``changes`` (first, last; s): one run from rest through the last change and a
+    record's length twice gives the response at every start from a record's length
+    before the first change (the logger started early: samples before switch-on are at
+    rest) to one after the last (the record holds the relaxation only); the whole record
+    is compared at each."""
+    first, last = changes
+    times = data["time_s"].to_numpy(float)
+    span = float(times[-1])
+    scan = _Scan(circuit, data, np.ones(len(times), bool), last + 2 * span + dt, dt)
+    low, width = first - span, last - first + 2 * span
+    if not scan.signals:
+        return origin, "", 0.0
+    best, least = scan.best_start(low, width, lowest=-math.inf)
+    at_file = float(scan.misfit([origin])[0])
+    if abs(best - origin) <= dt or at_file <= slack ** 2 * least:
+        return origin, "", 0.0
+    ratio = math.sqrt(at_file / least)
+    found = f"{best:.4g} s" + (", after the sources' last change" if best > last else "")
+    note = (f"the file's clock puts the sources' changes {ratio:.3g}× further from the "
+            f"record than the best start: the first sample's netlist time is estimated from "
+            f"the record, {found} (the sources change between {first:g} and {last:g} s; "
+            f"give a time offset to set it)")
+    return best, note, 2 * width
+
+
+class _Scan:
+    """The recorded ``window`` of ``data`` against ``circuit``'s run from rest to
+    ``t_end`` (s, output a :data:`FINER`-th of the sample spacing ``dt``), each signal in
+    units of its own noise."""
+
+    def __init__(self, circuit, data, window, t_end, dt):
+        from .data import signal_of_column
+
+        self.dt = dt
+        self.t_w = data["time_s"].to_numpy(float)[window]
+        self.sol = circuit.tran(t_end, t_step=dt / FINER)
+        self.t_end = float(self.sol.t[-1])
+        self.signals = []
+        for c in (c for c in data.columns if c != "time_s"):
+            s = signal_of_column(c)
+            if s not in self.sol.signals:
+                continue
+            y = data[c].to_numpy(float)[window]
+            ok = np.isfinite(y)
+            ok[np.arange(len(ok)) % max(1, len(ok) // SCAN_POINTS) != 0] = False
+            scale = record_sigma(data[c].to_numpy(float))
+            scale = scale if math.isfinite(scale) and scale > 0 else max(float(np.ptp(y[ok])), 1.0)
+            self.signals.append((np.asarray(self.sol[s], float), y[ok], self.t_w[ok], scale))
+
+    def misfit(self, starts):
+        """Σ over signals of ((simulated − recorded)/noise)² for each netlist start time
+        (before the run's start: its first value, the rest state)."""
+        from .model import sample_at
+
+        total = np.zeros(len(starts))
+        for model, y, t, scale in self.signals:
+            at = np.asarray(starts, float)[:, None] + t[None, :]
+            sim = sample_at(self.sol.t, model, at.ravel()).reshape(at.shape)
+            total += np.sum(((sim - y) / scale) ** 2, axis=1)
+        return total
+
+    def best_start(self, first, width, lowest=0.0):
+        """(netlist start time, its misfit): every start in [first, first + width) on a
+        grid of at most SCAN_POINTS, then zoomed in tenfold around the best until the
+        grid is a FINER-th of a sample (none before ``lowest``, s)."""
+        dt = self.dt
+        step = max(dt, width / SCAN_POINTS)
+        starts = first + np.arange(0.0, width, step)
+        while True:
+            cost = self.misfit(starts)
+            best, least = float(starts[int(np.argmin(cost))]), float(np.min(cost))
+            if step <= dt / FINER * (1 + 1e-9):
+                return best, least
+            reach, step = step, max(step / 10, dt / FINER)
+            starts = best + step * np.arange(-math.ceil(reach / step),
+                                             math.ceil(reach / step) + 1)
+            starts = starts[starts >= lowest]
+
+
 #: the name under which a clock estimated from the record is fitted with the parameters
 CLOCK = "t0@clock"
 
@@ -190,7 +257,7 @@ def clock_unit(state, times) -> float:
     parameter guesses is off by as much as the guesses move the sources' response (a
     pull-up 15 % off: most of a sample, where a 400 kPa edge within one sample turns
     that into a misfit of tens of kPa), so it is fitted with the parameters."""
-    if not state.clock or not state.clock_period or len(times) < 2:
+    if not state.clock or not state.clock_period or not state.driven or len(times) < 2:
         return 0.0
     return float(np.median(np.diff(times)))
 

@@ -312,7 +312,8 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
         state = clock_fitted(state, res.x[-1], ci.pop(CLOCK), clock_step)
         se.pop(CLOCK)
         model, jac = model.with_state(state), jac[:, :len(names)]
-    bounded = at_bounds(names, res.x[:len(names)], lb, ub)
+    n = len(names)
+    bounded = at_bounds(names, res.x[:n], lb[:n], ub[:n])
     if bounded:
         info["at_bound"] = bounded
         info["at_bound_note"] = "; ".join(

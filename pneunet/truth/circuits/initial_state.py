@@ -255,8 +255,9 @@ def choose_start(model, values: dict, data, mode: str = "auto",
     """The :class:`StartState` of ``model`` (a :class:`~pneunet.truth.circuits.model.TraceModel`)
     for the recording ``data`` (from :func:`~pneunet.truth.circuits.data.read_trace`) at the
     parameter guesses ``values``; see the module docstring for ``mode``.  Without
-    ``time_offset``, a circuit driven by periodic sources whose switching the file's
-    clock misplaces starts at the phase the record shows (:mod:`.clock`)."""
+    ``time_offset``, a circuit driven by periodic sources (or by sources that change
+    once) whose switching the file's clock misplaces starts where the record shows it
+    (:mod:`.clock`)."""
     if mode not in START_MODES:
         raise ParameterError(f"start {mode!r} is not one of {', '.join(START_MODES)}")
     clock = ""
@@ -264,9 +265,12 @@ def choose_start(model, values: dict, data, mode: str = "auto",
         origin = float(data.attrs.get("time_origin", 0.0))
         times = data["time_s"].to_numpy()
         circuit = model.base_circuit(values)
-        if sources_vary(circuit, origin, origin + float(times[-1])):
-            from .clock import source_clock
+        from .clock import source_changes, source_clock
 
+        # sources that change once are scanned wherever the file's clock puts the record
+        # (a wall-clock time after the last change, a logger started before the first)
+        if sources_vary(circuit, origin, origin + float(times[-1])) or \
+                source_changes(circuit) is not None:
             time_offset, clock, period = source_clock(circuit, data, origin)
             if not clock and origin == 0 and mode == "auto":
                 state = _start_at(model, values, data, mode, time_offset, where)
@@ -325,7 +329,7 @@ def _start_at(model, values: dict, data, mode: str, time_offset: float | None,
         # temperature) carry its sources' recent history: run them from rest before the
         # first sample, from switch-on (netlist time 0) or a record's length earlier, a
         # whole number of sample spacings (the simulation's output falls on the samples)
-        history = min(offset, span) if driven else 0.0
+        history = max(0.0, min(offset, span)) if driven else 0.0
         if history > 0 and len(times) > 1:
             dt = float(np.median(np.diff(times)))
             history = math.floor(history / dt + 1e-9) * dt
