@@ -189,6 +189,8 @@ def main(argv=None) -> None:
         wall = time.perf_counter() - t0
         steps = d.waterfall.steps
         ratio = f"{steps[0].held_out / d.noise_floor:.2f} → {steps[-1].held_out / d.noise_floor:.2f}"
+        if steps[-1].worst > steps[-1].held_out:  # the fitted window's, where it is worse
+            ratio += f" (fitted {steps[-1].worst / d.noise_floor:.2f})"
         print(f"| {name} | {start:.1f} | {expected} | {d.verdict} | "
               f"{', '.join(d.accepted) or '–'} | {ratio} | {d.final.start_state.mode} | "
               f"{'yes' if right(d, expected) else 'NO'} | {wall:.0f} ("

@@ -6,7 +6,7 @@ the screen's bound with a tighter one."""
 import pytest
 
 from pneunet.truth import Step, decide, verdict
-from pneunet.truth.core.verdict import at_floor, needs_candidates
+from pneunet.truth.core.verdict import at_floor, needs_candidates, untested_note
 
 FLOOR = 2.0  # any unit
 
@@ -63,7 +63,8 @@ def test_base_at_the_floor_is_adequate_even_when_an_effect_step_is_worse():
 def test_step_json_says_null_for_unknown_numbers():
     j = Step("base", 3.0, effects=("leak",), extra={"n": 5}).to_json()
     assert j == {"label": "base", "held_out_rms": 3.0, "held_out_se": None,
-                 "effects": ["leak"], "n": 5}
+                 "train_rms": None, "effects": ["leak"], "n": 5}
+    assert Step("x", 2.0, train=2.5).to_json()["train_rms"] == 2.5
     assert Step("x", float("inf"), se=0.5).to_json()["held_out_rms"] is None
     assert Step("x", 2.0, se=0.5).to_json()["held_out_se"] == 0.5
 
@@ -76,3 +77,23 @@ def test_step_json_says_null_for_unknown_numbers():
 ])
 def test_candidates_are_screened_above_near_floor(base, tolerance, screened):
     assert needs_candidates(base * FLOOR, FLOOR, tolerance) is screened
+
+
+@pytest.mark.parametrize("train, want", [(1.3, ("explained", ["tube"])),
+                                         (2.6, ("unexplained", []))])
+def test_a_step_must_be_at_the_floor_on_its_fitted_window_too(train, want):
+    """The amplifier inflated once and its actuator compliant (outside the library):
+    two tubes reached 1.13 × the floor on the held-out window, the relaxation tail after
+    the deflation, and 2.6 × on the window they were fitted to; it was `explained`."""
+    steps = [Step("base", 3.0 * FLOOR, train=7.3 * FLOOR),
+             Step("+tube", 1.13 * FLOOR, effects=("tube",), train=train * FLOOR)]
+    assert decide(steps, FLOOR) == want
+    note = untested_note(steps, FLOOR)
+    assert ("+tube 1.13× held out, 2.60× fitted" in note) is (train > 1.5)
+
+
+def test_a_base_at_the_floor_only_on_a_held_out_tail_is_not_adequate():
+    steps = [Step("base", 1.0 * FLOOR, train=3.0 * FLOOR)]
+    assert decide(steps, FLOOR) == ("unexplained", [])
+    assert needs_candidates(steps[0].worst, FLOOR)
+    assert Step("base", 1.0 * FLOOR).worst == 1.0 * FLOOR  # fitted window not known

@@ -3,15 +3,15 @@ fitted again from the best model's values of its parameters replaces a base fit 
 stopped in a wrong valley, and the verdict is then decided on it."""
 from types import SimpleNamespace
 
-from pneunet.truth.circuits.candidate_fits import base_refit
+from pneunet.truth.circuits.candidate_fits import CandidateFits, base_refit
 from pneunet.truth.core.verdict import Step, decide
 
-TEST = (10.0, 20.0)
+TEST, TRAIN = (10.0, 20.0), (0.0, 10.0)
 
 
 class Fit(SimpleNamespace):
     def error(self, window=None):
-        assert window == TEST
+        assert window in (TEST, TRAIN)
         return self.held_out
 
 
@@ -19,7 +19,8 @@ class Fitting:
     """Stand-in for CandidateFits: records the start it was given, returns ``refit``."""
 
     params = {"Rpull": (20.0, 2.0, 200.0), "V": (2.5, 0.2, 20.0)}
-    test = TEST
+    test, train = TEST, TRAIN
+    step, score = CandidateFits.step, CandidateFits.score
 
     def __init__(self, refit):
         self.refit, self.started = refit, []

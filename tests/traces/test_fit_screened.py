@@ -10,7 +10,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from pneunet.truth.circuits.candidate_fits import CONTINUATIONS, STAYED, fit_screened
+from pneunet.truth.circuits.candidate_fits import (CONTINUATIONS, STAYED, CandidateFits,
+                                                  fit_screened)
 from pneunet.truth.circuits.clock import CLOCK_NUDGES
 from pneunet.truth.circuits.initial_state import StartState
 from pneunet.truth.circuits.screen import SCREEN_KEEP
@@ -21,7 +22,8 @@ FLOOR = 1.0
 class Fitting:
     """Stand-in for CandidateFits: a candidate's fit reaches ``held_out[name]``."""
 
-    pool, test = None, (0.0, 1.0)
+    pool, test, train = None, (0.0, 1.0), (0.0, 1.0)
+    step, score = CandidateFits.step, CandidateFits.score
 
     def __init__(self, held_out, base=10.0, stopped=()):
         self.held_out, self.calls, self.failed = held_out, [], {}

@@ -90,9 +90,25 @@ class CandidateFits:
                               for k, v in eff.params.items()}}
 
     def reached(self, fits) -> bool:
-        """Whether a fitted candidate in ``fits`` reaches the noise floor (held out)."""
-        return any(at_floor(f.error(self.test), self.floor, self.tolerance)
-                   for n, f in fits.items() if n != "none")
+        """Whether a fitted candidate in ``fits`` reaches the noise floor."""
+        return any(self.at_floor(f) for n, f in fits.items() if n != "none")
+
+    def step(self, label: str, fit, effects=()) -> Step:
+        """The waterfall step of ``fit``: its held-out error and its fitted window's."""
+        return Step(label, fit.error(self.test), effects=tuple(effects),
+                    train=fit.error(self.train))
+
+    def score(self, fit) -> float:
+        """What candidates are ranked and compared by: the larger of ``fit``'s held-out
+        and fitted window's errors (:attr:`~pneunet.truth.core.verdict.Step.worst`; a
+        held-out window that hardly moves, a relaxation tail, would rank a model that
+        misses the fitted window first)."""
+        return self.step("", fit).worst
+
+    def at_floor(self, fit) -> bool:
+        """Whether ``fit`` is at the noise floor on the held-out window and on its fitted
+        one."""
+        return at_floor(self.score(fit), self.floor, self.tolerance)
 
     def start(self, eff, x_start, max_nfev, kind: str, state=None) -> TraceFit | None:
         """The fit of ``eff`` (None: the base model) from ``x_start`` (its parameters;
@@ -157,17 +173,17 @@ def _second_starts(rows, close, fits, fitting, max_nfev, say) -> None:
     user's guess) for each of the first round ``close``, and for each later fitted row
     whose fit stayed in the base fit's valley (:data:`STAYED`), in the screen's order,
     until one reaches the floor."""
-    base = fitting.base.error(fitting.test)
+    base = fitting.score(fitting.base)
     stayed = [r for r in rows[len(close):] if r["effect"].name in fits
-              and fits[r["effect"].name].error(fitting.test) >= STAYED * base]
+              and fitting.score(fits[r["effect"].name]) >= STAYED * base]
     for row in close + stayed:
         eff = row["effect"]
         if eff.name not in fits and eff.name not in fitting.failed:
             continue
         say(f"fitting {eff.name} from a second start")
         fit = fitting.start(eff, fitting.second_start(row), max_nfev, "second start")
-        if fit is not None and (eff.name not in fits or fit.error(fitting.test)
-                                < fits[eff.name].error(fitting.test)):
+        if fit is not None and (eff.name not in fits or fitting.score(fit)
+                                < fitting.score(fits[eff.name])):
             fits[eff.name] = fit
             fitting.failed.pop(eff.name, None)
         if fitting.reached(fits):
@@ -188,12 +204,11 @@ def continue_stopped(fits, fitting, max_nfev, say) -> None:
     while that lowers its cost on the fit window): neither the verdict nor the intervals
     are decided where a budget stopped a fit.  A tube whose R and V trade along R·V needs
     about 300 simulations from its second start, twice its budget."""
-    test = fitting.test
     for _ in range(CONTINUATIONS):
-        name = min((n for n in fits if n != "none"), key=lambda n: fits[n].error(test),
+        name = min((n for n in fits if n != "none"), key=lambda n: fitting.score(fits[n]),
                    default=None)
         if name is None or not fits[name].stopped_on_budget() \
-                or fits[name].error(test) >= fitting.base.error(test):
+                or fitting.score(fits[name]) >= fitting.score(fitting.base):
             return
         last = fits[name]
         say(f"fitting {name} on from where its budget stopped it")
@@ -214,11 +229,10 @@ def clock_restarts(fits, fitting, max_nfev, say) -> None:
     the clock's minimum (the inverter chain's control-line tube, recorded from 4.08 s on
     the logger's clock: 1.74× the floor; from its clock half a sample earlier, 1.03×,
     half a sample later 25×)."""
-    test = fitting.test
-    name = min((n for n in fits if n != "none"), key=lambda n: fits[n].error(test),
+    name = min((n for n in fits if n != "none"), key=lambda n: fitting.score(fits[n]),
                default=None)
     if name is None or fitting.reached(fits) \
-            or fits[name].error(test) >= fitting.base.error(test):
+            or fitting.score(fits[name]) >= fitting.score(fitting.base):
         return
     first = fits[name]
     state = first.start_state
@@ -298,22 +312,21 @@ def second_effects(fits, best, fitted, cand, params, fitting, model_setup, df, t
 def fit_pairs(fits, best, seconds, steps, fitting, max_nfev, notes, say):
     """Fit ``best`` with each second effect of ``seconds`` in turn until a pair reaches
     the floor; the best pair so far is the waterfall's last step."""
-    test, floor, tolerance = fitting.test, fitting.floor, fitting.tolerance
     for nxt, x_start in seconds:
         say(f"fitting {best} + {nxt.name}")
         pair = fitting.pair((fits[best].effects[0], nxt), x_start, max_nfev, notes,
                             fits[best].start_state)
         name = f"{best} + {nxt.name}"
-        if pair is not None and pair.error(test) < steps[-1].held_out:
+        if pair is not None and fitting.score(pair) < steps[-1].worst:
             pair = _continued_pair(pair, name, fitting, max_nfev, notes, say)
-        if pair is None or (name in fits and fits[name].error(test) <= pair.error(test)):
+        if pair is None or (name in fits and fitting.score(fits[name]) <= fitting.score(pair)):
             continue
         fits[name] = pair
-        if pair.error(test) < steps[-1].held_out:
+        if fitting.score(pair) < steps[-1].worst:
             if len(steps) > 2:
                 steps.pop()
-            steps.append(Step(nxt.name, pair.error(test), effects=(best, nxt.name)))
-        if at_floor(pair.error(test), floor, tolerance):
+            steps.append(fitting.step(nxt.name, pair, (best, nxt.name)))
+        if fitting.at_floor(pair):
             break
 
 
@@ -337,8 +350,8 @@ def single_refit_from_pair(fits, best, steps, fitting, max_nfev, say) -> bool:
     """Parsimony: when a pair reached the floor, ``best`` alone again from the pair's
     values (a single fit that stopped in a wrong valley, a second effect making up for
     it); True when that single fit is better than ``best``'s first (it replaces it)."""
-    test, floor, tolerance = fitting.test, fitting.floor, fitting.tolerance
-    if len(steps) < 3 or not at_floor(steps[-1].held_out, floor, tolerance):
+    floor, tolerance = fitting.floor, fitting.tolerance
+    if len(steps) < 3 or not at_floor(steps[-1].worst, floor, tolerance):
         return False
     pair = fits[" + ".join(steps[-1].effects)]
     drop = pair.effects[1].params
@@ -346,11 +359,11 @@ def single_refit_from_pair(fits, best, steps, fitting, max_nfev, say) -> bool:
     again = fitting.start(pair.effects[0], {k: v for k, v in pair.values.items()
                                             if k not in drop}, max_nfev, "the pair's values",
                           pair.start_state)
-    if again is None or again.error(test) >= fits[best].error(test):
+    if again is None or fitting.score(again) >= fitting.score(fits[best]):
         return False
     fits[best] = again
-    steps[1] = Step(best, again.error(test), effects=(best,))
-    if at_floor(again.error(test), floor, tolerance):
+    steps[1] = fitting.step(best, again, (best,))
+    if fitting.at_floor(again):
         steps.pop()  # the second effect is not needed
     return True
 
@@ -360,19 +373,19 @@ def base_refit(fits, steps, fitting, max_nfev, notes, say) -> bool:
     (a base fit that stopped in a wrong valley, an effect merely escaping it); True when
     that fit is better than the base fit (it replaces it, and the verdict is decided on
     it: an effect is accepted only where the base model cannot reach the floor)."""
-    if len(steps) < 2 or steps[-1].held_out >= steps[0].held_out:
+    if len(steps) < 2 or steps[-1].worst >= steps[0].worst:
         return False
     name = " + ".join(steps[-1].effects)
     best = fits[name]
     say(f"fitting the base model again from {name}'s values")
     again = fitting.start(None, {k: best.values[k] for k in fitting.params}, max_nfev,
                           f"{name}'s values", best.start_state)
-    if again is None or again.error(fitting.test) >= steps[0].held_out:
+    if again is None or fitting.score(again) >= steps[0].worst:
         return False
     notes.append(f"base model fitted again from {name}'s values: held-out error "
                  f"{steps[0].held_out:.4g} → {again.error(fitting.test):.4g} {again.unit}")
     fits["none"] = again
-    steps[0] = Step(steps[0].label, again.error(fitting.test))
+    steps[0] = fitting.step(steps[0].label, again)
     return True
 
 
@@ -425,28 +438,42 @@ def at_bound(fit: TraceFit) -> str:
     return ""
 
 
-def parsimonious_first(fitted: list, fits: dict, test, floor: float,
-                       tolerance: float) -> tuple[list, str]:
+def ranked(fits: dict, fitting: CandidateFits) -> tuple[list, str]:
+    """(the fitted candidates' names, best first by :meth:`CandidateFits.score` with the
+    parsimonious one of those alike moved first; :func:`parsimonious_first`'s note)."""
+    fitted = sorted((n for n in fits if n != "none"), key=lambda n: fitting.score(fits[n]))
+    return parsimonious_first(fitted, fits, fitting.test, fitting.floor, fitting.tolerance,
+                              fitting.score, fitting.train)
+
+
+def parsimonious_first(fitted: list, fits: dict, test, floor: float, tolerance: float,
+                       score=None, train=None) -> tuple[list, str]:
     """``fitted`` (candidate names by held-out error, best first) with the candidate of
     fewest parameters among those whose held-out residuals the best's cannot be told
     from (:func:`~pneunet.truth.core.verdict.indistinguishable`) and that are on the
     best's side of the verdict's threshold (``tolerance`` × ``floor``) moved first, and a
     note naming the others ('' when the best stays first alone): a tube of small
     resistance at a valve's output and a dead volume at that node fit a recording alike,
-    and the recording cannot choose between them."""
+    and the recording cannot choose between them.  ``score(fit)``: the error the
+    threshold applies to (default: held out); with the fitted window ``train`` the
+    residuals there must be alike too."""
     if len(fitted) < 2:
         return fitted, ""
-    best = fits[fitted[0]].scaled_residuals(test)
-    side = at_floor(fits[fitted[0]].error(test), floor, tolerance)
+    score = score or (lambda fit: fit.error(test))
+    windows = [test] + ([train] if train is not None else [])
+    best = [fits[fitted[0]].scaled_residuals(w) for w in windows]
+    side = at_floor(score(fits[fitted[0]]), floor, tolerance)
     alike = [fitted[0]] + [n for n in fitted[1:]
-                           if at_floor(fits[n].error(test), floor, tolerance) == side
-                           and indistinguishable(fits[n].scaled_residuals(test), best)]
+                           if at_floor(score(fits[n]), floor, tolerance) == side
+                           and all(indistinguishable(fits[n].scaled_residuals(w), b)
+                                   for w, b in zip(windows, best))]
     if len(alike) < 2:
         return fitted, ""
     size = {n: sum(len(e.params) for e in fits[n].effects) for n in alike}
     first = min(alike, key=lambda n: (size[n], alike.index(n)))
     others = [n for n in alike if n != first]
-    note = (f"{first} and {', '.join(others)} fit the held-out record alike (held out "
+    note = (f"{first} and {', '.join(others)} fit the {'' if train is not None else 'held-out '}record "
+            "alike (held out "
             + ", ".join(f"{fits[n].error(test):.4g}" for n in [first] + others)
             + f"): the recording cannot tell them apart; {first} is taken, with the fewest "
             "parameters")

@@ -27,10 +27,11 @@ import numpy as np
 from ...common.reprs import Summarized, listed, number
 from ..core.locate import best_lag, hot_phases, phase_profile
 from ..core.noise import ROUNDING_SIGMA, difference_sigma, resolution, segments
-from ..core.verdict import TOLERANCE, Step, at_floor, decide, needs_candidates
+from ..core.verdict import (TOLERANCE, Step, at_floor, decide, needs_candidates,
+                            untested_note)
 from ..core.waterfall import Waterfall
 from .candidate_fits import (CandidateFits, at_bound, base_refit, fit_pairs, fit_screened,
-                             parsimonious_first, refine_final, second_effects, screen_data,
+                             ranked, refine_final, second_effects, screen_data,
                              single_refit_from_pair, unfitted_row)
 from .data import read_trace, signal_of_column, signal_unit, split_by_cycles
 from .effects import candidates_for
@@ -248,7 +249,7 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
         floor = noise["floor"]
         unit = base.unit
         base_err = base.error(test)
-        steps = [Step("base model", base_err)]
+        steps = [Step("base model", base_err, train=base.error(train))]
         ranking = [_row("none", base, test, floor)]
         notes = [f"base fit: {base.extras['intervals']['note']}"]
         circuit = TraceModel(build, fixed, options=options, state=state).circuit(base.values)
@@ -256,7 +257,7 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
         verdict, accepted = decide(steps, floor, tolerance)
         fitting = CandidateFits(build, df, params, fixed, node, train, test, base, pool,
                                 options, where, state, floor, tolerance)
-        if cand and needs_candidates(base_err, floor, tolerance):
+        if cand and needs_candidates(steps[0].worst, floor, tolerance):
             say(f"screening {len(cand)} candidate effects")
             t0 = time.perf_counter()
             names = list(params)
@@ -273,8 +274,7 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
             t0 = time.perf_counter()
             fit_screened(rows, fits, fitting, screen, 4 * max_nfev, say)
             timing["candidate_fits_s"] = time.perf_counter() - t0
-            fitted = sorted((n for n in fits if n != "none"), key=lambda n: fits[n].error(test))
-            fitted, alike = parsimonious_first(fitted, fits, test, floor, tolerance)
+            fitted, alike = ranked(fits, fitting)
             if alike:
                 notes.append(alike)
             ranking += [_row(n, fits[n], test, floor, fitting.starts.get(n))
@@ -284,9 +284,9 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
             ranking.sort(key=lambda r: (r["held_out_rms"] is None, r["held_out_rms"] or 0))
             # a waterfall step is an effect that lowers the held-out error: a best single
             # fit worse than the base model stays in the ranking only
-            if fitted and fits[fitted[0]].error(test) < base_err:
+            if fitted and fitting.score(fits[fitted[0]]) < steps[0].worst:
                 best = fitted[0]
-                steps.append(Step(best, fits[best].error(test), effects=(best,)))
+                steps.append(fitting.step(best, fits[best], (best,)))
                 # noise floor from the best model too: less misfit leaks into it
                 nb = noise_floor(fits[best], grid)
                 if nb["floor"] < floor:
@@ -315,12 +315,16 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
         if verdict != "unexplained" and refine_final(fits, name, fitting,
                                                      BASE_BUDGET * max_nfev, notes, say):
             step = next(i for i, s in enumerate(steps) if list(s.effects) == accepted)
-            steps[step] = replace(steps[step], held_out=fits[name].error(test))
+            steps[step] = replace(steps[step], held_out=fits[name].error(test),
+                                  train=fits[name].error(train))
             ranking = [r if r["effect"] != name else
                        _row(name, fits[name], test, floor, fitting.starts.get(name))
                        for r in ranking]
             base = fits["none"]
             verdict, accepted = decide(steps, floor, tolerance)
+        untested = untested_note(steps, floor, tolerance)
+        if untested:
+            notes.append(untested)
         final = fits[" + ".join(accepted)] if accepted else base
         if not final.success:
             notes.append(f"{' + '.join(accepted) or 'base model'}: {final.unconverged()}")

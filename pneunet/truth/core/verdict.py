@@ -6,6 +6,11 @@
 * ``explained``: an accepted effect (or two, the waterfall) brings the held-out error
   back within ``tolerance`` × floor;
 * ``unexplained``: structure above the floor remains that no candidate removes.
+
+Where a step's error on its fitted window is known (``Step.train``), that must be at the
+floor too: a held-out window that does not move (a record's relaxation tail after a
+single inflation) is met by any model, and a model that misses the window it was fitted
+to explains nothing there.
 """
 from __future__ import annotations
 
@@ -36,10 +41,18 @@ class Step:
     se: float = float("nan")  # its standard error, when known
     effects: tuple = ()
     extra: dict = field(default_factory=dict)
+    train: float = float("nan")  # error on the fitted window, when known
+
+    @property
+    def worst(self) -> float:
+        """The larger of the held-out and the fitted window's error (held-out alone
+        when the fitted window's is not known)."""
+        return self.held_out if math.isnan(self.train) else max(self.held_out, self.train)
 
     def to_json(self) -> dict:
         return {"label": self.label, "held_out_rms": _num(self.held_out),
-                "held_out_se": _num(self.se), "effects": list(self.effects), **self.extra}
+                "held_out_se": _num(self.se), "train_rms": _num(self.train),
+                "effects": list(self.effects), **self.extra}
 
 
 def at_floor(error: float, floor: float, tolerance: float = TOLERANCE) -> bool:
@@ -78,17 +91,30 @@ def decide(steps: list[Step], floor: float, tolerance: float = TOLERANCE) -> tup
     if not steps:
         raise ValueError("no waterfall steps")
     accepted = []
-    base = steps[0].held_out
+    base = steps[0].worst
     near = min(NEAR_FLOOR, tolerance)
     if not at_floor(base, floor, tolerance):
         accepted = next((list(s.effects) for s in steps[1:]
-                         if at_floor(s.held_out, floor, tolerance)), [])
+                         if at_floor(s.worst, floor, tolerance)), [])
     elif needs_candidates(base, floor, tolerance):
         accepted = next((list(s.effects) for s in steps[1:]
-                         if at_floor(s.held_out, floor, near)
-                         and s.held_out <= (1.0 - NEAR_GAIN) * base), [])
-    final = next((s.held_out for s in steps if list(s.effects) == accepted), steps[0].held_out)
-    return verdict(steps[0].held_out, final, floor, accepted, tolerance=tolerance), accepted
+                         if at_floor(s.worst, floor, near)
+                         and s.worst <= (1.0 - NEAR_GAIN) * base), [])
+    final = next((s.worst for s in steps if list(s.effects) == accepted), base)
+    return verdict(base, final, floor, accepted, tolerance=tolerance), accepted
+
+
+def untested_note(steps: list[Step], floor: float, tolerance: float = TOLERANCE) -> str:
+    """A sentence for the report when a step is at the floor on the held-out window but
+    not on its fitted one ('' when none is)."""
+    odd = [s for s in steps if at_floor(s.held_out, floor, tolerance)
+           and not at_floor(s.worst, floor, tolerance)]
+    if not odd:
+        return ""
+    return ("held out at the floor but not on the fitted window: " + "; ".join(
+        f"{s.label} {s.held_out / floor:.2f}× held out, {s.train / floor:.2f}× fitted"
+        for s in odd) + " (the held-out part tests little: such a step counts as not "
+        "at the floor)")
 
 
 #: rms residuals closer than this fraction fit alike whatever their standard error: a

@@ -22,13 +22,17 @@ class Waterfall:
         return [self.base_label if i == 0 else f"+ {s.label}" for i, s in enumerate(self.steps)]
 
     def table(self) -> str:
-        """Plain-text table: label, held-out error, change, ratio to the floor."""
-        lines = [f"    {'model':<28}{'held-out':>10}{'change':>10}{'× floor':>9}  ({self.unit})"]
+        """Plain-text table: label, held-out error, change, ratio to the floor (and the
+        fitted window's error where known)."""
+        fitted = any(np.isfinite(s.train) for s in self.steps)
+        lines = [f"    {'model':<28}{'held-out':>10}{'change':>10}{'× floor':>9}"
+                 + (f"{'fitted':>10}" if fitted else "") + f"  ({self.unit})"]
         prev = None
         for lab, s in zip(self.labels(), self.steps):
             change = "" if prev is None else f"{s.held_out - prev:+10.3g}"
             ratio = s.held_out / self.floor if self.floor > 0 else float("nan")
-            lines.append(f"    {lab:<28}{s.held_out:10.3g}{change:>10}{ratio:9.2f}")
+            lines.append(f"    {lab:<28}{s.held_out:10.3g}{change:>10}{ratio:9.2f}"
+                         + (f"{s.train:10.3g}" if fitted else ""))
             prev = s.held_out
         lines.append(f"    {'noise floor':<28}{self.floor:10.3g}")
         return "\n".join(lines)
