@@ -16,7 +16,9 @@ import pytest
 
 from pneunet.netlist.builder import NetlistBuilder
 from pneunet.truth.circuits import diagnose_trace, fit_trace
+from pneunet.common.errors import DataError
 from pneunet.truth.circuits.clock import source_changes
+from pneunet.truth.circuits.data import split_by_cycles
 from tests.traces.standalone_driven import amplifier_record
 from tests.traces.test_start_state import AMPLIFIER
 
@@ -81,14 +83,30 @@ def test_a_record_after_the_last_change_is_not_driven_and_fits_no_clock():
     assert fit.error() < 0.33
 
 
-def diagnosed(own_clock=False, **hidden):
+def diagnosed(own_clock=False, start=4.8447, **hidden):
     """The driven study's one-shot record (seed 1: from 4.84 s) with ``hidden`` effects
     (tests/traces/standalone_driven.py), diagnosed whole."""
-    rec = amplifier_record(4.8447, 15.0, dt=0.01, noise=0.3, seed=1, once=True,
+    rec = amplifier_record(start, 15.0, dt=0.01, noise=0.3, seed=1, once=True,
                            R_line=TRUTH["Rtube.R"], V=TRUTH["Amck.V"], **hidden)
     if own_clock:
         rec["time_s"] = 0.01 * np.arange(len(rec))
     return diagnose_trace(NetlistBuilder(ONCE), rec, PARAMS, node="muscle")
+
+
+def test_a_one_shot_record_that_moves_in_both_halves_is_split_in_time():
+    """Recorded from 1.5 s: the inflation in the first half, the deflation in the second,
+    one rising crossing.  The diagnosis refused it ("holds 0 full cycle(s) … record
+    longer"), as it refuses an oscillator's record of one cycle; a circuit driven by its
+    sources is split in time."""
+    rec = amplifier_record(1.5, 15.0, dt=0.01, noise=0.3, seed=2, once=True,
+                           R_line=TRUTH["Rtube.R"], V=TRUTH["Amck.V"])
+    with pytest.raises(DataError, match="full cycle"):
+        split_by_cycles(rec, "muscle")
+    train, test = split_by_cycles(rec, "muscle", driven=True)
+    assert train == pytest.approx((0.0, 7.5)) and test == pytest.approx((7.5, 15.0))
+    d = diagnosed(own_clock=True, start=1.5)
+    assert d.verdict == "adequate", d.report()
+    assert d.train_window == pytest.approx((0.0, 7.5))
 
 
 @pytest.mark.study

@@ -374,12 +374,14 @@ def rising_crossings(t, y):
                         crossing_band(y))
 
 
-def split_by_cycles(data, node: str, train_fraction: float = 0.5, where: str = "trace"):
+def split_by_cycles(data, node: str, train_fraction: float = 0.5, where: str = "trace",
+                    driven: bool = False):
     """(train, test) windows: the first cycles (``train_fraction`` of the full cycles,
     at least 2) and the remainder; for a record that does not oscillate at ``node``
     (:func:`oscillates`: a steady state, a slow drift) the first ``train_fraction`` of
     its duration and the rest.  DataError when an oscillating record holds fewer than
-    two full cycles at ``node`` (nothing would be left to test on)."""
+    two full cycles at ``node`` (nothing would be left to test on), unless the circuit
+    is ``driven`` by its sources (a single inflation and deflation): split in time."""
     df = read_trace(data)
     col = f"p_{node}_kPa"
     if col not in df:
@@ -389,10 +391,10 @@ def split_by_cycles(data, node: str, train_fraction: float = 0.5, where: str = "
                         + ", ".join(c for c in df.columns if c != "time_s"))
     t = df["time_s"].to_numpy()
     y = df[col].to_numpy()
-    if not swings(y):  # a steady record: its later part is held out
+    rises = rising_crossings(t, y) if swings(y) else []
+    if not swings(y) or (driven and len(rises) < 3):  # its later part is held out
         cut = float(t[0] + train_fraction * (t[-1] - t[0]))
         return (float(t[0]), cut), (cut, float(t[-1]))
-    rises = rising_crossings(t, y)
     if len(rises) < 3:
         raise DataError(f"column {col} holds {max(len(rises) - 1, 0)} full cycle(s); a "
                         "diagnosis needs at least two (fit on the first, test on the rest)",

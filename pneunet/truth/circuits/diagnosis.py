@@ -228,10 +228,11 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
     wall = time.perf_counter()
     df = read_trace(data, signals)
     where = df.attrs["source"]
-    train, test = split_by_cycles(df, node, train_fraction, where=where)
+    options = FIT_OPTIONS if options is None else options
+    train, test = split_by_cycles(df, node, train_fraction, where=where,
+                                  driven=_sources_vary(build, fixed, params, options, df))
     timing = {}
     pool = process_pool(workers)
-    options = FIT_OPTIONS if options is None else options
     try:
         say("base fit")
         t0 = time.perf_counter()
@@ -354,6 +355,20 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
     return TraceDiagnosis(verdict, accepted, floor, unit, ranking, fits, wf, where_txt,
                           {k: v for k, v in noise.items()}, train, test, timing, notes,
                           signal_table(base, final, test, noise, tolerance))
+
+
+def _sources_vary(build, fixed, params, options, df) -> bool:
+    """Whether a source of the netlist (at the parameter guesses) changes within the
+    record on the file's clock, or changes once at all (a logger's own clock may place
+    the record anywhere; periodic sources are not listed from switch-on: a Unix time
+    would be 10⁸ periods)."""
+    from .clock import source_changes, varying_waveforms
+
+    circuit = TraceModel(build, fixed, options=options).base_circuit(
+        {k: v[0] for k, v in params.items()})
+    origin = float(df.attrs.get("time_origin", 0.0))
+    return bool(varying_waveforms(circuit, origin, origin + float(df["time_s"].iloc[-1]))) \
+        or source_changes(circuit) is not None
 
 
 def _row(name, fit: TraceFit, test, floor, starts=None) -> dict:
