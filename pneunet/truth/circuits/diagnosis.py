@@ -253,6 +253,10 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
         steps = [Step("base model", base_err, train=base.error(train))]
         ranking = [_row("none", base, test, floor)]
         notes = [f"base fit: {base.extras['intervals']['note']}"]
+        if train == test:
+            notes.append("nothing is held out: a record of a circuit driven by its sources "
+                         "with fewer than two cycles at the node is fitted whole, and its "
+                         "'held-out' errors are the fitted window's")
         circuit = TraceModel(build, fixed, options=options, state=state).circuit(base.values)
         cand = candidates_for(circuit, effects)
         verdict, accepted = decide(steps, floor, tolerance)
