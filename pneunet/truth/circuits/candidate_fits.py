@@ -472,8 +472,8 @@ def parsimonious_first(fitted: list, fits: dict, test, floor: float, tolerance: 
     size = {n: sum(len(e.params) for e in fits[n].effects) for n in alike}
     first = min(alike, key=lambda n: (size[n], alike.index(n)))
     others = [n for n in alike if n != first]
-    note = (f"{first} and {', '.join(others)} fit the {'' if train is not None else 'held-out '}record "
-            "alike (held out "
+    record = "record" if train is not None else "held-out record"
+    note = (f"{first} and {', '.join(others)} fit the {record} alike (held out "
             + ", ".join(f"{fits[n].error(test):.4g}" for n in [first] + others)
             + f"): the recording cannot tell them apart; {first} is taken, with the fewest "
             "parameters")
