@@ -112,6 +112,16 @@ def source_changes(circuit) -> tuple[float, float] | None:
     return (float(min(corners)), float(max(corners))) if corners else None
 
 
+def clock_from_record(circuit, origin: float, span: float) -> bool:
+    """Whether the netlist time of a record's first sample is read from the record
+    (:func:`source_clock`) for ``circuit``: its sources vary within the file's window
+    [``origin``, ``origin`` + ``span``] (s), or change once at all (a logger's own clock
+    may place the record anywhere; periodic corners are not listed from switch-on: a
+    Unix time would be 10⁸ periods)."""
+    return bool(varying_waveforms(circuit, origin, origin + span)) \
+        or source_changes(circuit) is not None
+
+
 def source_clock(circuit, data, origin: float,
                  slack: float = CLOCK_SLACK) -> tuple[float, str, float]:
     """(netlist time of the first sample, s; a note, '' when the file's clock is kept;

@@ -362,17 +362,14 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
 
 
 def _sources_vary(build, fixed, params, options, df) -> bool:
-    """Whether a source of the netlist (at the parameter guesses) changes within the
-    record on the file's clock, or changes once at all (a logger's own clock may place
-    the record anywhere; periodic sources are not listed from switch-on: a Unix time
-    would be 10⁸ periods)."""
-    from .clock import source_changes, varying_waveforms
+    """Whether the netlist (at the parameter guesses) is driven by its sources for the
+    record ``df`` (:func:`~pneunet.truth.circuits.clock.clock_from_record`)."""
+    from .clock import clock_from_record
 
     circuit = TraceModel(build, fixed, options=options).base_circuit(
         {k: v[0] for k, v in params.items()})
-    origin = float(df.attrs.get("time_origin", 0.0))
-    return bool(varying_waveforms(circuit, origin, origin + float(df["time_s"].iloc[-1]))) \
-        or source_changes(circuit) is not None
+    return clock_from_record(circuit, float(df.attrs.get("time_origin", 0.0)),
+                             float(df["time_s"].iloc[-1]))
 
 
 def _row(name, fit: TraceFit, test, floor, starts=None) -> dict:

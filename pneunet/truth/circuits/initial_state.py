@@ -81,7 +81,9 @@ class StartState:
     reason: str = ""
     signals: dict = field(default_factory=dict)
     clock: str = ""  # how the netlist time of the first sample was found, when not the file's
-    clock_period: float = 0.0  # s, the sources' common period when ``clock`` is set
+    #: s, when ``clock`` is set: the sources' common period (sources that change once:
+    #: twice the starts scanned); the clock's fit moves within half of it
+    clock_period: float = 0.0
     clock_ci: tuple = ()  # s, the interval of the first sample's netlist time once fitted
 
     @property
@@ -265,12 +267,11 @@ def choose_start(model, values: dict, data, mode: str = "auto",
         origin = float(data.attrs.get("time_origin", 0.0))
         times = data["time_s"].to_numpy()
         circuit = model.base_circuit(values)
-        from .clock import source_changes, source_clock
+        from .clock import clock_from_record, source_clock
 
         # sources that change once are scanned wherever the file's clock puts the record
         # (a wall-clock time after the last change, a logger started before the first)
-        if sources_vary(circuit, origin, origin + float(times[-1])) or \
-                source_changes(circuit) is not None:
+        if clock_from_record(circuit, origin, float(times[-1])):
             time_offset, clock, period = source_clock(circuit, data, origin)
             if not clock and origin == 0 and mode == "auto":
                 state = _start_at(model, values, data, mode, time_offset, where)
