@@ -22,10 +22,11 @@ def _oscillator():
     return c
 
 
-def _mixed():
-    """Two valves (one with backward parameters), a pipe, resistors, a polytropic volume
-    and an isothermal actuator: every float path, both flow directions, and nodes fed by
-    three families (their sum's order matters to the last bit)."""
+def _mixed(n=1.3):
+    """Two valves (one with backward parameters), a pipe, resistors, a volume (polytropic
+    with exponent ``n``) and an isothermal actuator: every float path, both flow
+    directions, and nodes fed by three families (their sum's order matters to the last
+    bit)."""
     c = Circuit("mixed", ambient=96.0)
     c.pressure_source("PH", "high", 289.0)
     c.pressure_source("PC", "c", 300.0)
@@ -35,7 +36,7 @@ def _mixed():
     c.resistor("Rm", "mid", "atm", 2.0)
     c.resistor("Rt", "act", "muscle", 0.2)
     c.actuator("A1", "muscle", V=30.0, p0=120.0)
-    c.volume("V2", "act", 5.0, n=1.3)
+    c.volume("V2", "act", 5.0, n=n)
     return c
 
 
@@ -65,8 +66,23 @@ def _vectorised(circuit):
     return dae
 
 
-@pytest.mark.parametrize("build", [_oscillator, _mixed, _thermal])
-def test_floats_equal_the_vectorised_path_to_the_bit(build):
+def _mixed_isothermal():
+    return _mixed(n=1.0)
+
+
+@pytest.mark.parametrize("build, ulps", [(_oscillator, 0), (_mixed_isothermal, 0),
+                                         (_thermal, 0), (_mixed, 4)])
+def test_floats_equal_the_vectorised_path_to_the_bit(build, ulps):
+    """Bit for bit, except where a polytropic volume raises its pressure ratio to a power:
+    numpy's power on an array runs SIMD code on some processors (AVX-512) that differs
+    from the C library's in the last place, so there the two agree within a few units
+    of the largest term."""
+    def same(a, b):
+        if not ulps:
+            np.testing.assert_array_equal(a, b)
+        else:
+            np.testing.assert_allclose(a, b, rtol=0, atol=ulps * np.spacing(np.max(np.abs(b))))
+
     floats, arrays = CircuitDAE(build()), _vectorised(build())
     assert floats._floats is not None  # the float path is the one under test
     block_f, block_a = floats.algebraic_block(), arrays.algebraic_block()
@@ -81,12 +97,12 @@ def test_floats_equal_the_vectorised_path_to_the_bit(build):
         yp = rng.normal(0.0, 50.0, floats.n)
         t, cj = float(k), rng.uniform(0.0, 1e3)
         for a, b in zip(floats.evaluate(t, y, yp, cj), arrays.evaluate(t, y, yp, cj)):
-            np.testing.assert_array_equal(a, b)
-        np.testing.assert_array_equal(floats.evaluate(t, y, yp)[0],
-                                      arrays.evaluate(t, y, yp)[0])
+            same(a, b)
+        same(floats.evaluate(t, y, yp)[0], arrays.evaluate(t, y, yp)[0])
         for residual in (True, False):
             for a, b in zip(block_f.evaluate(t, y, residual), block_a.evaluate(t, y, residual)):
-                np.testing.assert_array_equal(a, b)
+                if a is not None:
+                    same(a, b)
 
 
 def test_a_family_without_a_float_path_keeps_the_circuit_vectorised():
@@ -173,3 +189,43 @@ def test_one_node_relaxation_on_floats_at_states_a_transient_does_not_visit(buil
             np.testing.assert_array_equal(one, ref)
             _, (jac,), _ = monitor._one.lists(1.0, one)
             assert 0.0 < jac < 1.0
+
+
+def test_the_indicator_of_a_few_algebraic_nodes_on_floats_is_lapacks():
+    """A tank with heat exchange has an algebraic node per line into it besides the valve
+    output: the fold indicator factorises that small block on Python floats, with the
+    pivots LAPACK's dgetrf chooses; at random states (near and at folds too, equal
+    pressures) it is the array path's within a few units in the last place."""
+    from pneunet.engine.solvers import folds
+
+    dae = CircuitDAE(_thermal())
+    monitor = folds.FoldMonitor(dae, dae.options.fold_threshold)
+    assert monitor._few is not None and 1 < monitor._block.size <= folds.FEW_ON_FLOATS
+    arrays = folds.FoldMonitor(dae, dae.options.fold_threshold)
+    arrays._few = None
+    rng = np.random.default_rng(11)
+    values = []
+    for k in range(300):
+        y = rng.uniform(96.0, 500.0, dae.n)
+        if k % 5 == 0:
+            y[:] = y[0]
+        a, b = monitor.indicator(float(k), y), arrays.indicator(float(k), y)
+        assert a == pytest.approx(b, rel=1e-13, abs=1e-300)
+        values.append(b)
+    assert min(values) < 0.05 < max(values)  # states near a fold and far from one
+
+
+@pytest.mark.parametrize("n", [2, 3, 4])
+def test_pivots_on_lists_are_lapacks(n):
+    """The small LU behind that indicator against LAPACK's dgetrf (partial pivoting) on
+    random matrices with rows of very different scales."""
+    from scipy.linalg.lapack import dgetrf
+
+    from pneunet.engine.solvers.folds import _pivots_on_lists
+
+    rng = np.random.default_rng(n)
+    for _ in range(200):
+        a = rng.normal(size=(n, n)) * 10.0 ** rng.uniform(-3, 3, size=(n, 1))
+        ours = np.array(_pivots_on_lists(a.tolist()))
+        np.testing.assert_allclose(ours, np.diag(dgetrf(a)[0]), rtol=1e-12,
+                                   atol=1e-12 * np.abs(a).max())

@@ -39,12 +39,19 @@ class FoldMonitor:
         self._block = dae.algebraic_block()
         # one algebraic node on Python floats: the indicator and relaxation without arrays
         self._one = self._block.floats if self._block.size == 1 else None
+        # a few on floats: the indicator's LU on lists (a heat-exchanging tank's inlets)
+        self._few = self._block.floats if 1 < self._block.size <= FEW_ON_FLOATS else None
 
     def indicator(self, t, y) -> float:
         """Smallest normalised LU pivot of J_aa (0 at a fold, ~1 far from one)."""
         if self._one is not None:
             _, jac, scale = self._one.lists(t, y, residual=False)
             return abs(jac[0]) / scale[0]
+        if self._few is not None:
+            _, jac, scale = self._few.lists(t, y, residual=False)
+            n = len(scale)
+            rows = [[jac[i * n + j] / scale[i] for j in range(n)] for i in range(n)]
+            return min(map(abs, _pivots_on_lists(rows)))
         _, jac, scale = self._block.evaluate(t, y, residual=False)
         if isinstance(jac, np.ndarray):
             if jac.shape[0] == 1:
@@ -77,7 +84,9 @@ class FoldMonitor:
         √(t* − t), so κ² extrapolates linearly to the fold time t*; the first push δ
         goes :data:`PUSH_PAST` times the estimated distance, growing by
         :data:`PUSH_GROWTH` (:data:`PUSH_FINE` times, then by 4) while the state lands
-        back on its own branch.
+        back on its own branch, or on a mirror root with a pressure at or below zero (a
+        line of 2 kPa·s/mg into the oscillator's tank: pushed 111 s on, its tank at
+        −201 kPa, and the run went on from there).
         """
         d = self.dae.differential
         t, y, yp, previous = self.approach(t, y, yp, previous)
@@ -90,7 +99,7 @@ class FoldMonitor:
             pushed = y.copy()
             pushed[d] += yp[d] * delta
             landed = (self._relax if self._one is None else self._relax_one)(t + delta, pushed)
-            if landed is not None and \
+            if landed is not None and (landed > 0).all() and \
                     self.indicator(t + delta, landed) > 3 * self.threshold * self.reference:
                 return t + delta, landed
             delta *= PUSH_GROWTH if estimate and attempt < PUSH_FINE else 4.0
@@ -275,6 +284,8 @@ APPROACH_FROM = 1e-5
 PUSH_PAST = 1.1
 PUSH_GROWTH = 1.5
 PUSH_FINE = 6
+#: algebraic nodes up to which the fold indicator factorises J_aa on Python floats
+FEW_ON_FLOATS = 4
 APPROACH_FRACTION = 0.5
 APPROACH_STEPS = 60
 BRANCH_NEWTON_STEPS = 8
@@ -321,6 +332,29 @@ def _solve_newton(jac, res):
     except (np.linalg.LinAlgError, RuntimeError, ZeroDivisionError):
         return None
     return step if np.isfinite(step).all() else None
+
+
+def _pivots_on_lists(rows):
+    """Diagonal of U in an LU factorisation of the small matrix ``rows`` (lists of
+    floats) with partial pivoting, the pivots LAPACK's dgetrf chooses (equal to its
+    within rounding: a few units in the last place)."""
+    rows = [list(r) for r in rows]
+    n = len(rows)
+    pivots = []
+    for k in range(n):
+        best = max(range(k, n), key=lambda i: abs(rows[i][k]))
+        rows[k], rows[best] = rows[best], rows[k]
+        pivot = rows[k][k]
+        pivots.append(pivot)
+        if pivot == 0.0:
+            continue
+        for i in range(k + 1, n):
+            factor = rows[i][k] / pivot
+            if factor:
+                row_i, row_k = rows[i], rows[k]
+                for j in range(k + 1, n):
+                    row_i[j] -= factor * row_k[j]
+    return pivots
 
 
 def _lu_pivots(jac):
