@@ -20,6 +20,7 @@ import numpy as np
 from ..physics import elements
 from ..physics.elements.base import ElementSpec, FamilyContext
 from .float_plan import FloatAlgebraicBlock, FloatPlan, on_floats
+from .solvers.newton import DENSE_LIMIT
 
 
 def _cat(arrays) -> np.ndarray:
@@ -276,9 +277,11 @@ class CircuitDAE:
         mass[self._diagonal_at] = 0.0
         if not mass.any():  # one storage term per node: divide
             return f[d] / diagonal[d]
+        mass[self._diagonal_at] = diagonal
+        if self.n <= DENSE_LIMIT:  # LAPACK: scipy.sparse's slicing costs ~1 ms a call
+            return np.linalg.solve(self.dense(mass)[np.ix_(d, d)], f[d])
         from scipy.sparse.linalg import spsolve
 
-        mass[self._diagonal_at] = diagonal
         return spsolve(self.csc(mass)[d][:, d].tocsc(), f[d])
 
     # -- breakpoints and reporting --------------------------------------------------------
