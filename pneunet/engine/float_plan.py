@@ -8,7 +8,8 @@ oscillator: ~14 µs per residual, of which its laws take ~2 µs), and IDA asks f
 residual, a Jacobian or the fold indicator several times per step.  Here each family's
 laws run on Python floats and their flows and partials are summed in the order of the
 vectorised path's bincounts over the same buffers: the same operations on the same
-values, so the same bits (tests/core/test_float_plan.py).
+values, so the same bits (tests/core/test_float_plan.py; a polytropic volume's power
+within a few ulps: numpy's on an array runs SIMD code on some processors).
 """
 from __future__ import annotations
 
