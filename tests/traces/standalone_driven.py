@@ -31,6 +31,7 @@ MIRROR_BACKWARD = {"Rf": 0.395, "pclose": 19.52, "ptrans": 93.44, "e": 1.62, "ai
 DEFAULTS = {"pH": 289.0, "pL": 120.0, "ambient": 96.0, "pc_hi": 496.0, "pc_lo": 96.0,
             "T": 10.0, "R_line": 0.2, "V": 30.0, "p0": 120.0, "V_act": 1e-4,
             "once": False,         # the pulses switch once (no period): one inflation at T/2
+            "supply_on": None,     # s: the supply rests at pL until then, rises to pH in 10 ms
             # hidden effects (None: absent)
             "heat_tau": None,      # energy balance in the actuator, hA = m(200 kPa)·c_v/τ
             "tube_ctrl": None,     # (R, V): tube from the in-valve's control source
@@ -117,10 +118,16 @@ def amplifier_record(t_start=0.0, duration=30.0, dt=0.01, noise=0.3, seed=0,
             return y[1] / capacitance(p["V"], y[idx["T"]])
         return y[1]
 
+    def supply(t):
+        on = p["supply_on"]
+        if on is None or t >= on + 0.01:
+            return p["pH"]
+        return p["pL"] + (p["pH"] - p["pL"]) * max(0.0, t - on) / 0.01
+
     def rhs(t, y):
         p_act, p_m = y[0], muscle_pressure(y)
         p_cin = y[idx["ctrl"]] if "ctrl" in idx else pulse(t, *c_in)
-        q_in = valve(p["pH"], p_act, p_cin)
+        q_in = valve(supply(t), p_act, p_cin)
         q_out = valve(p_act, p["pL"], pulse(t, *c_out))
         q_line = line(p_act, p_m, p["R_line"])
         q_leak = (p_m - p["ambient"]) / p["leak"] if p["leak"] else 0.0
@@ -156,7 +163,9 @@ def amplifier_record(t_start=0.0, duration=30.0, dt=0.01, noise=0.3, seed=0,
     cycles = 1 if p["once"] else int(t_end / T) + 1
     breaks = sorted({0.0, t_end} | {b for k in range(cycles)
                                     for b in (k * T + T / 2, k * T + T / 2 + 0.01,
-                                              k * T + T, k * T + T + 0.01) if 0 < b < t_end})
+                                              k * T + T, k * T + T + 0.01) if 0 < b < t_end}
+                    | ({b for b in (p["supply_on"], p["supply_on"] + 0.01) if 0 < b < t_end}
+                       if p["supply_on"] is not None else set()))
     times = np.arange(t_start, t_end + 1e-9, dt)
     t_all, y_all = integrate_between(rhs, y0, breaks, times, t_start)
     values = {"act": y_all[0], "muscle": np.array([muscle_pressure(c) for c in y_all.T])}

@@ -43,10 +43,51 @@ def record(start, seconds=12.0, clock=0.0, seed=2):
     return rec
 
 
+SUPPLY_ON = "netlists/amplifier_supply_on.pn"
+
+
 def test_the_times_at_which_one_shot_sources_change():
     assert source_changes(NetlistBuilder(ONCE)({})) == pytest.approx((5.0, 10.01))
     assert source_changes(NetlistBuilder(AMPLIFIER)({})) is None  # periodic pulses
     assert source_changes(NetlistBuilder("netlists/oscillator.pn")({})) is None  # constant
+    # periodic pulses beside a supply switched on once: the switch-on alone
+    assert source_changes(NetlistBuilder(SUPPLY_ON)({})) == pytest.approx((13.0, 13.01))
+
+
+@pytest.mark.parametrize("start, clock", [(3.0, 0.0), (9.0, 0.0), (3.0, 1.7e9)])
+def test_periodic_sources_beside_a_one_off_change_are_placed_by_it(start, clock):
+    """The valves pulse from 0 s with a period of 10 s, the supply comes on at 13 s
+    (netlists/amplifier_supply_on.pn): 14 s of p_muscle at 50 Hz from 3 s and from 9 s on
+    the logger's clock, and with a Unix-time column.  The file's clock was kept (no common
+    period, nothing that changes only once): the model inflated at the wrong time.  The
+    switch-on places the record as a one-off change does, the periodic pulses beside it."""
+    rec = amplifier_record(start, 14.0, dt=DT, noise=0.3, seed=4, supply_on=13.0,
+                           signals=("muscle",), R_line=TRUTH["Rtube.R"], V=TRUTH["Amck.V"])
+    rec = rec.iloc[:int(round(14.0 / DT))].copy()
+    rec["time_s"] = clock + DT * np.arange(len(rec))
+    fit = fit_trace(NetlistBuilder(SUPPLY_ON), rec, PARAMS, node="muscle")
+    state = fit.start_state
+    assert "estimated from the record" in state.clock and state.driven
+    assert state.first_time == pytest.approx(start, abs=0.1 * DT)
+    for k, v in TRUTH.items():
+        assert fit.ci[k][0] <= v <= fit.ci[k][1], (k, fit.ci[k])
+    assert fit.error() < 0.33  # the noise is 0.3 kPa
+
+
+def test_a_short_record_long_after_the_switch_on_is_placed_at_its_phase_of_the_pulses():
+    """3 s from 29 s: the actuator inflated, then deflating from 30 s.  The netlist time is
+    known only modulo the pulses' period of 10 s; the starts scanned after the switch-on
+    must span a period (a record's length, 3 s, would leave this phase out)."""
+    rec = amplifier_record(29.0, 3.0, dt=DT, noise=0.3, seed=5, supply_on=13.0,
+                           signals=("muscle",), R_line=TRUTH["Rtube.R"], V=TRUTH["Amck.V"])
+    rec = rec.iloc[:int(round(3.0 / DT))].copy()
+    rec["time_s"] = DT * np.arange(len(rec))
+    fit = fit_trace(NetlistBuilder(SUPPLY_ON), rec, {"Rtube.R": PARAMS["Rtube.R"]},
+                    fixed={"Amck.V": TRUTH["Amck.V"]}, node="muscle")
+    first = fit.start_state.first_time
+    assert first > 13.01 and (first - 29.0 + 5.0) % 10.0 - 5.0 == pytest.approx(0.0,
+                                                                               abs=0.1 * DT)
+    assert fit.error() < 0.33
 
 
 @pytest.mark.parametrize("start, clock", [(-3.0, 0.0), (1.0, 0.0), (7.0, 0.0), (3.3, 1.7e9)])

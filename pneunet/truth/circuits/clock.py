@@ -18,7 +18,9 @@ the record's length), and the start state says so.
 
 Sources that change once (a STEP, a PULSE without a period, a PWL) are placed the same
 way by the change the record shows (:func:`_one_shot_clock`): every start from a record's
-length before the first change to one after the last, the whole record compared.
+length before the first change to one after the last, the whole record compared; so are
+periodic sources beside such a change (a supply switched on while the valves pulse), the
+starts after it then spanning a period of theirs at least.
 
 That phase is found at the parameter guesses.  :func:`fit_clock` then fits the clock
 with the parameters (a last least-squares unknown: its shift in sample spacings), from
@@ -92,10 +94,12 @@ def varying_waveforms(circuit, t0: float, t1: float) -> list:
 
 
 def source_changes(circuit) -> tuple[float, float] | None:
-    """(first, last) netlist times (s) at which ``circuit``'s sources change, when every
-    source that changes does so a finite number of times (a STEP, a PULSE without a
-    period, a PWL); None when one repeats or is not known in closed form (a periodic
-    PULSE, a SIN, a Python function), or when none changes."""
+    """(first, last) netlist times (s) at which those of ``circuit``'s sources that change
+    a finite number of times (a STEP, a PULSE without a period, a PWL) change; periodic
+    sources beside them (a PULSE with a period, an undamped SIN) are left out: the one-off
+    change alone fixes the netlist time (a supply switched on while the valves pulse).
+    None when none changes a finite number of times, or a source is not known in closed
+    form (a Python function, a damped SIN)."""
     from ...physics.waveforms import Constant, PiecewiseLinear, Pulse, Step, Waveform
 
     corners = []
@@ -103,13 +107,40 @@ def source_changes(circuit) -> tuple[float, float] | None:
         for v in spec.params.values():
             if not isinstance(v, Waveform) or isinstance(v, Constant):
                 continue
+            if common_period([v]) is not None:
+                continue
             if not (isinstance(v, (Step, PiecewiseLinear)) or
                     (isinstance(v, Pulse) and not v.period > 0)):
                 return None
-            ts = np.asarray(v.breakpoints(-math.inf, math.inf), float)
-            if ts.size and np.ptp([float(v.value(x)) for x in (ts[0] - 1, *ts, ts[-1] + 1)]):
-                corners.extend(ts)
+            corners.extend(_changing_corners(v))
     return (float(min(corners)), float(max(corners))) if corners else None
+
+
+def _changing_corners(wave) -> list[float]:
+    """The corners (s) of a waveform that changes a finite number of times at which its
+    value changes on one side (not a PWL's first point, held from before)."""
+    ts = np.unique(np.asarray(wave.breakpoints(-math.inf, math.inf), float))
+    gaps = np.diff(ts)
+    out = []
+    for i, t in enumerate(ts):
+        near = [g for g in (gaps[i - 1] if i else None, gaps[i] if i < gaps.size else None)
+                if g is not None]
+        d = 0.5 * min(near + [1.0])
+        here = float(wave.value(t))
+        if float(wave.value(t - d)) != here or float(wave.value(t + d)) != here:
+            out.append(float(t))
+    return out
+
+
+def _periodic_sources_period(circuit) -> float:
+    """The common period (s) of ``circuit``'s periodic sources, 0 when there are none
+    (or they have none)."""
+    from ...physics.waveforms import Constant, Waveform
+
+    waves = [v for spec in circuit.elements.values() for v in spec.params.values()
+             if isinstance(v, Waveform) and not isinstance(v, Constant)
+             and common_period([v]) is not None]
+    return (common_period(waves) or 0.0) if waves else 0.0
 
 
 def clock_from_record(circuit, origin: float, span: float) -> bool:
@@ -133,13 +164,14 @@ def source_clock(circuit, data, origin: float,
     times = data["time_s"].to_numpy(float)
     span = float(times[-1]) if len(times) else 0.0
     waves = varying_waveforms(circuit, origin, origin + span)
-    period = common_period(waves) if waves else None
-    changes = None if period else source_changes(circuit)
+    changes = source_changes(circuit)  # a one-off change fixes the netlist time
+    period = common_period(waves) if waves and changes is None else None
     if (period is None and changes is None) or len(times) < 10:
         return origin, "", 0.0
     dt = float(np.median(np.diff(times)))
     if changes is not None:
-        return _one_shot_clock(circuit, data, origin, slack, changes, dt)
+        return _one_shot_clock(circuit, data, origin, slack, changes, dt,
+                               _periodic_sources_period(circuit))
     delay = max(float(getattr(w, "delay", 0.0)) for w in waves)
     window = times <= min(span, period)
     # output finer than the samples: the phase is refined between them
@@ -176,18 +208,19 @@ def source_clock(circuit, data, origin: float,
     return delay + phase + period * max(1, math.ceil(span / period)), note, period
 
 
-def _one_shot_clock(circuit, data, origin, slack, changes, dt):
-    """:func:`source_clock` for sources that change only between netlist times
-    ``changes`` (first, last; s): one run from rest through the last change and a
-    record's length twice gives the response at every start from a record's length
+def _one_shot_clock(circuit, data, origin, slack, changes, dt, repeat=0.0):
+    """:func:`source_clock` for sources that change once between netlist times
+    ``changes`` (first, last; s), beside periodic ones of common period ``repeat`` (s; 0:
+    none): one run from rest gives the response at every start from a record's length
     before the first change (the logger started early: samples before switch-on are at
-    rest) to one after the last (the record holds the relaxation only); the whole record
-    is compared at each."""
+    rest) to one after the last, or a period of the periodic sources if longer (the
+    record holds only what follows: its phase); the whole record is compared at each."""
     first, last = changes
     times = data["time_s"].to_numpy(float)
     span = float(times[-1])
-    scan = _Scan(circuit, data, np.ones(len(times), bool), last + 2 * span + dt, dt)
-    low, width = first - span, last - first + 2 * span
+    after = max(span, repeat)
+    scan = _Scan(circuit, data, np.ones(len(times), bool), last + after + span + dt, dt)
+    low, width = first - span, last - first + span + after
     if not scan.signals:
         return origin, "", 0.0
     best, least = scan.best_start(low, width, lowest=-math.inf)
