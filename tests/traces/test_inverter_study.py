@@ -1,7 +1,8 @@
 """The trace diagnosis on a third circuit, never studied before: the two-inverter chain of
 ``netlists/inverter.pn`` (``python -m pytest -m study_long``; the clean case takes ~5 s,
-the control-line tube ~2 min on 2 cores; ``-m study`` the tube among four other tubes
-on the logger's own clock, ~2 min; ``benchmarks/study_trace_diagnosis.py --inverter``
+the control-line tube ~2 min on 2 cores, and the tube among four other tubes on the
+logger's own clock, ~5 min; ``-m study`` a logger's clock from zero on a record far from
+rest, ~2 min; ``benchmarks/study_trace_diagnosis.py --inverter``
 runs every case for its table).
 
 Stand-alone recordings (:mod:`.standalone_inverter`): R_pull 23 kPa·s/mg (the netlist
@@ -85,7 +86,7 @@ def test_heat_exchange_in_out1s_volume_is_named_and_covered():
     assert all(covers(d, {**TRUTH, "tau@X1.Vout": 0.5}).values()), d.report()
 
 
-@pytest.mark.study
+@pytest.mark.study_long
 def test_a_tube_the_bent_base_fit_hides_is_named_from_its_second_start_on_the_loggers_clock():
     """The control-line tube among four other tubes (-m study: ~3 min; the whole library
     is the study_long test above), recorded on the logger's own clock (time from 0 at the

@@ -1,8 +1,9 @@
 """Recordings as a logger makes them, diagnosed whole (issue 31; one to four minutes each).
 CI runs the ``study`` cases (``python -m pytest -m study``): the new user's recording, the
-oscillator's heat exchange and a supply ripple recorded mid-run, the clean driven one, heat
-plus a tube at once (both effects named) and the leak (outside the library).  The single
-effects and the compliant actuator are ``study_long`` (``python -m pytest -m study_long``;
+oscillator's heat exchange and a supply ripple recorded mid-run, the clean driven one and
+the leak (outside the library).  The single effects, heat plus a tube at once (both
+effects named; 4–5 min) and the compliant actuator are ``study_long``
+(``python -m pytest -m study_long``;
 ``benchmarks/study_trace_diagnosis.py --driven`` runs the same cases for its table).
 
 * The new user's recording: the oscillator of ``netlists/oscillator.pn`` with R_vent 3.5
@@ -90,7 +91,7 @@ LONG = pytest.mark.study_long
     pytest.param((("V_act", 6.0),), {"dead_volume@act"}, marks=LONG),
     pytest.param((("tube_ctrl", (5.0, 5.0)),), {"tube@Xin.ctrl"}, marks=LONG),
     pytest.param((("heat_tau", 1.0), ("tube_ctrl", (5.0, 5.0))),
-                 {"volume_heat_transfer", "tube@Xin.ctrl"}, marks=pytest.mark.study),
+                 {"volume_heat_transfer", "tube@Xin.ctrl"}, marks=LONG),
 ])
 def test_driven_hidden_effect_is_named(case, expected):
     d = driven(case)
