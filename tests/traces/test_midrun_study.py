@@ -1,8 +1,8 @@
 """Recordings as a logger makes them, diagnosed whole (issue 31; one to four minutes each).
 CI runs the ``study`` cases (``python -m pytest -m study``): the new user's recording, the
 oscillator's heat exchange and a supply ripple recorded mid-run, the clean driven one and
-the leak (outside the library).  The single effects, heat plus a tube at once (both
-effects named; 4–5 min) and the compliant actuator are ``study_long``
+heat plus a tube at once (both effects named).  The single effects, the leak and the
+compliant actuator (outside the library; 4–5 min each) are ``study_long``
 (``python -m pytest -m study_long``;
 ``benchmarks/study_trace_diagnosis.py --driven`` runs the same cases for its table).
 
@@ -91,14 +91,14 @@ LONG = pytest.mark.study_long
     pytest.param((("V_act", 6.0),), {"dead_volume@act"}, marks=LONG),
     pytest.param((("tube_ctrl", (5.0, 5.0)),), {"tube@Xin.ctrl"}, marks=LONG),
     pytest.param((("heat_tau", 1.0), ("tube_ctrl", (5.0, 5.0))),
-                 {"volume_heat_transfer", "tube@Xin.ctrl"}, marks=LONG),
+                 {"volume_heat_transfer", "tube@Xin.ctrl"}, marks=pytest.mark.study),
 ])
 def test_driven_hidden_effect_is_named(case, expected):
     d = driven(case)
     assert d.verdict == "explained" and set(d.accepted) == expected, d.report()
 
 
-@pytest.mark.parametrize("case", [pytest.param((("leak", 15.0),), marks=pytest.mark.study),
+@pytest.mark.parametrize("case", [pytest.param((("leak", 15.0),), marks=LONG),
                                   pytest.param((("compliance", 0.004),), marks=LONG)])
 def test_driven_physics_outside_the_library_is_unexplained(case):
     d = driven(case)
