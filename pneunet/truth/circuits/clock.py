@@ -76,20 +76,23 @@ def common_period(waveforms) -> float | None:
     return None
 
 
-def varying_waveforms(circuit, t0: float, t1: float) -> list:
-    """The waveforms of ``circuit``'s sources that change within [t0, t1] (s)."""
+def _waveforms(circuit):
+    """The waveforms of ``circuit``'s sources that are not constant by definition."""
     from ...physics.waveforms import Constant, Waveform
 
+    return [v for spec in circuit.elements.values() for v in spec.params.values()
+            if isinstance(v, Waveform) and not isinstance(v, Constant)]
+
+
+def varying_waveforms(circuit, t0: float, t1: float) -> list:
+    """The waveforms of ``circuit``'s sources that change within [t0, t1] (s)."""
     grid = np.linspace(t0, t1, 400)
     out = []
-    for spec in circuit.elements.values():
-        for v in spec.params.values():
-            if not isinstance(v, Waveform) or isinstance(v, Constant):
-                continue
-            ts = np.unique(np.concatenate([grid, np.asarray(v.breakpoints(t0, t1), float)]))
-            ts = ts[(ts >= t0) & (ts <= t1)]
-            if np.ptp([float(v.value(x)) for x in ts]) > 0:
-                out.append(v)
+    for v in _waveforms(circuit):
+        ts = np.unique(np.concatenate([grid, np.asarray(v.breakpoints(t0, t1), float)]))
+        ts = ts[(ts >= t0) & (ts <= t1)]
+        if np.ptp([float(v.value(x)) for x in ts]) > 0:
+            out.append(v)
     return out
 
 
@@ -100,19 +103,16 @@ def source_changes(circuit) -> tuple[float, float] | None:
     change alone fixes the netlist time (a supply switched on while the valves pulse).
     None when none changes a finite number of times, or a source is not known in closed
     form (a Python function, a damped SIN)."""
-    from ...physics.waveforms import Constant, PiecewiseLinear, Pulse, Step, Waveform
+    from ...physics.waveforms import PiecewiseLinear, Pulse, Step
 
     corners = []
-    for spec in circuit.elements.values():
-        for v in spec.params.values():
-            if not isinstance(v, Waveform) or isinstance(v, Constant):
-                continue
-            if common_period([v]) is not None:
-                continue
-            if not (isinstance(v, (Step, PiecewiseLinear)) or
-                    (isinstance(v, Pulse) and not v.period > 0)):
-                return None
-            corners.extend(_changing_corners(v))
+    for v in _waveforms(circuit):
+        if common_period([v]) is not None:
+            continue
+        if not (isinstance(v, (Step, PiecewiseLinear)) or
+                (isinstance(v, Pulse) and not v.period > 0)):
+            return None
+        corners.extend(_changing_corners(v))
     return (float(min(corners)), float(max(corners))) if corners else None
 
 
@@ -135,11 +135,7 @@ def _changing_corners(wave) -> list[float]:
 def _periodic_sources_period(circuit) -> float:
     """The common period (s) of ``circuit``'s periodic sources, 0 when there are none
     (or they have none)."""
-    from ...physics.waveforms import Constant, Waveform
-
-    waves = [v for spec in circuit.elements.values() for v in spec.params.values()
-             if isinstance(v, Waveform) and not isinstance(v, Constant)
-             and common_period([v]) is not None]
+    waves = [v for v in _waveforms(circuit) if common_period([v]) is not None]
     return (common_period(waves) or 0.0) if waves else 0.0
 
 
