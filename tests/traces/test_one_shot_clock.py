@@ -74,6 +74,22 @@ def test_periodic_sources_beside_a_one_off_change_are_placed_by_it(start, clock)
     assert fit.error() < 0.33  # the noise is 0.3 kPa
 
 
+def test_another_switch_on_rate_and_truth_are_placed_too():
+    """Not this file's habits: the supply on at 7.3 s (``t_on`` given), 20 Hz, 0.5 kPa, both
+    the junction and the actuator recorded, R_line 0.3 and V 45 mL, a Unix-time column."""
+    dt = 0.05
+    rec = amplifier_record(4.1, 16.0, dt=dt, noise=0.5, seed=11, supply_on=7.3,
+                           signals=("muscle", "act"), R_line=0.3, V=45.0)
+    rec = rec.iloc[:int(round(16.0 / dt))].copy()
+    rec["time_s"] = 1.7e9 + dt * np.arange(len(rec))
+    fit = fit_trace(NetlistBuilder(SUPPLY_ON), rec, PARAMS, fixed={"t_on": 7.3},
+                    node="muscle")
+    assert fit.start_state.first_time == pytest.approx(4.1, abs=0.1 * dt)
+    for k, v in {"Rtube.R": 0.3, "Amck.V": 45.0}.items():
+        assert fit.ci[k][0] <= v <= fit.ci[k][1], (k, fit.ci[k])
+    assert fit.error() < 0.55
+
+
 def test_a_short_record_long_after_the_switch_on_is_placed_at_its_phase_of_the_pulses():
     """3 s from 29 s: the actuator inflated, then deflating from 30 s.  The netlist time is
     known only modulo the pulses' period of 10 s; the starts scanned after the switch-on
