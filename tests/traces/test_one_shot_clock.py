@@ -75,16 +75,16 @@ def test_periodic_sources_beside_a_one_off_change_are_placed_by_it(start, clock)
 
 
 def test_another_switch_on_rate_and_truth_are_placed_too():
-    """Not this file's habits: the supply on at 7.3 s (``t_on`` given), 20 Hz, 0.5 kPa, both
+    """Not this file's habits: the supply on at 17.3 s (``t_on`` given), after a period of the pulses, 20 Hz, 0.5 kPa, both
     the junction and the actuator recorded, R_line 0.3 and V 45 mL, a Unix-time column."""
     dt = 0.05
-    rec = amplifier_record(4.1, 16.0, dt=dt, noise=0.5, seed=11, supply_on=7.3,
+    rec = amplifier_record(14.1, 16.0, dt=dt, noise=0.5, seed=11, supply_on=17.3,
                            signals=("muscle", "act"), R_line=0.3, V=45.0)
     rec = rec.iloc[:int(round(16.0 / dt))].copy()
     rec["time_s"] = 1.7e9 + dt * np.arange(len(rec))
-    fit = fit_trace(NetlistBuilder(SUPPLY_ON), rec, PARAMS, fixed={"t_on": 7.3},
+    fit = fit_trace(NetlistBuilder(SUPPLY_ON), rec, PARAMS, fixed={"t_on": 17.3},
                     node="muscle")
-    assert fit.start_state.first_time == pytest.approx(4.1, abs=0.1 * dt)
+    assert fit.start_state.first_time == pytest.approx(14.1, abs=0.1 * dt)
     for k, v in {"Rtube.R": 0.3, "Amck.V": 45.0}.items():
         assert fit.ci[k][0] <= v <= fit.ci[k][1], (k, fit.ci[k])
     assert fit.error() < 0.55
