@@ -127,10 +127,16 @@ def integrate(dae, t_start, t_stop, y, yp, outputs=None, backend=None, progress=
             record.add(t, y, yp, seg, keep_end=True)
             t, y, yp = seg.t[-1], seg.y[-1], seg.yp[-1]
             if status == EVENT:
-                t, y = folds.jump(t, y, yp, previous=previous)
+                t_fold, y_fold, yp_fold = t, y, yp
+                t, y, jumped = folds.jump(t, y, yp, previous=previous)
                 yp = dae.derivative(t, y)
-                record.jump(t, y, yp)
-                folds.restart(t, y)
+                if jumped:
+                    record.jump(t, y, yp)
+                    folds.restart(t, y)
+                elif t > t_fold:  # a near-fold: on along the branch from where κ is least
+                    record.add(t_fold, y_fold, yp_fold,
+                               Segment(EVENT, np.array([t]), y[None, :], yp[None, :], ""),
+                               keep_end=True)
                 restart = True
             elif round(t, 12) in jumps and t < t_stop:
                 y, yp = consistent_state(dae, t, y)

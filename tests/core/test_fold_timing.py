@@ -113,3 +113,30 @@ def test_no_jump_lands_on_a_mirror_root_below_zero_pressure():
         return
     assert sol.t[-1] == pytest.approx(20.5) and min(np.min(sol[s]) for s in sol.signals
                                                      if s.startswith("p_")) > 0
+
+
+@pytest.mark.parametrize("r_vent, oscillates", [(3.177, True), (3.193, False)])
+def test_near_the_end_of_oscillation_the_branch_goes_on_as_the_equations_say(r_vent,
+                                                                            oscillates):
+    """The 44.2 mL oscillator stops oscillating between R_vent 3.177 and 3.185: its tank
+    falls towards the valve's fold and, just short of it, settles at 178.8 kPa, with the
+    fold indicator κ stalled at 0.3 % of its reference (a near-fold).  The jump used to
+    push the state on linearly until it landed away from there, 0.5-1.1 s later on each
+    cycle: it oscillated on past the end, skipping time.  The stand-alone equations
+    (tests/traces/standalone.py: a 1e-4 mL stub at the output, scipy's Radau) decide."""
+    from traces.standalone import oscillator_record
+
+    values = {"Rout": 0.9081, "Rvent": r_vent, "V": 44.22}
+    ref = oscillator_record(30.0, dt=0.05, noise=0.0, signals=("tank",), **values)
+    late = ref["time_s"].to_numpy() >= 20.0
+    swing = np.ptp(ref["p_tank_kPa"].to_numpy()[late])
+    assert (swing > 50.0) == oscillates  # the premise: which side of the end it is
+    circuit = oscillator(values)
+    circuit.options = circuit.options.replace(flow_band=1.0)
+    sol = circuit.tran(30.0, t_step=0.05)
+    assert np.diff(sol.t).max() <= 0.05 + 1e-9  # no time skipped
+    p = np.interp(ref["time_s"], sol.t, sol["p_tank"])
+    if oscillates:
+        assert np.ptp(p[late]) == pytest.approx(swing, rel=0.02)
+    else:
+        assert np.abs(p[late] - ref["p_tank_kPa"].to_numpy()[late]).max() < 0.2
