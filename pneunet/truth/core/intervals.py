@@ -32,16 +32,43 @@ UNDETERMINED = 1e-6
 #: a parameter's share of an undetermined direction above which its interval is
 #: unbounded (smaller shares are round-off of the singular vectors)
 UNDETERMINED_SHARE = 1e-3
+#: a direction v with ‖J·v‖ below this many times ‖(J − J_other side)·v‖ is undetermined:
+#: finite-difference noise alone gives 0.3–0.6 (two tanks' R·V, all four fitted: 0.32),
+#: a noiseless determined direction 1/(step × relative curvature) (two time constants
+#: 5 % apart at a step of 0.005 in ln x: 91; with 1e-5 of noise in each evaluation: 3.1)
+NOISE_RATIO = 1.0
+#: the share of a direction found by :data:`NOISE_RATIO` below which a parameter is
+#: not in it: the differences' noise mixes others in (0.0015 of the logger's clock in
+#: the two tanks' R·V)
+NOISE_SHARE = 0.02
 
 
-def inverse_normal_matrix(J):
+def inverse_normal_matrix(J, spread=None):
     """(JᵀJ)⁻¹ from the singular values of J (no squaring of its condition number), the
-    undetermined directions (unit vectors v with J·v ≈ 0, :data:`UNDETERMINED`) and the
-    inverse on the determined directions alone.  Along an undetermined direction the
-    variance is infinite, not dropped as a pseudo-inverse would drop it (which gives the
-    parameters on it intervals of zero width)."""
+    undetermined directions (unit vectors v with J·v ≈ 0) and the inverse on the
+    determined directions alone.  Along an undetermined direction the variance is
+    infinite, not dropped as a pseudo-inverse would drop it (which gives the parameters
+    on it intervals of zero width).
+
+    A direction is undetermined where its singular value is below :data:`UNDETERMINED`
+    of the largest, or, given ``spread`` (J minus the Jacobian from differences on each
+    parameter's other side), where J·v is within :data:`NOISE_RATIO` of spread·v: a
+    Jacobian of finite differences through a simulator carries the simulation's error
+    divided by the step, and along an exact invariance of the model (every resistance
+    ×k and every volume ÷k of a circuit whose flows are not recorded) that noise is all
+    J·v holds; along a determined direction J·v is the response and spread·v its
+    curvature, a step's fraction of it."""
     _, sv, vt = np.linalg.svd(J, full_matrices=False)
     free = sv <= UNDETERMINED * (sv[0] if sv.size else 0.0)
+    if spread is not None:
+        for k in range(len(sv) - 1, 0, -1):  # from the smallest: the weakest first
+            if free[k]:
+                continue
+            if sv[k] > NOISE_RATIO * float(np.linalg.norm(spread @ vt[k])):
+                break
+            free[k] = True
+            vt[k] = np.where(np.abs(vt[k]) < NOISE_SHARE, 0.0, vt[k])
+            vt[k] /= np.linalg.norm(vt[k])
     inv_sq = np.divide(1.0, sv ** 2, out=np.zeros_like(sv), where=~free)
     determined = (vt.T * inv_sq) @ vt
     cov = determined.copy()
@@ -110,7 +137,8 @@ def undetermined_note(combos) -> str:
                        f"{c['value']:.4g} [{lo:.4g}, {hi:.4g}] is")
         else:
             out.append(", ".join(c["parameters"]) + " move together without changing the "
-                       "fit (not separately determined): their intervals are unbounded")
+                       "fit (not separately determined): their intervals are unbounded; "
+                       "fix one of them (--set NAME=VALUE) to determine the others")
     return "; ".join(out)
 
 
@@ -193,8 +221,10 @@ def sandwich(J, r, groups=None, determined=None):
     return cov, {"ar_order": k, "ar_sum": float(a.sum()), "rho1": rho1, "dof_eff": dof}
 
 
-def intervals(x, J, r, names, *, groups=None, confidence: float = 0.95, log: bool = True):
-    """Confidence intervals of the parameters ``x`` (ln values when ``log``).
+def intervals(x, J, r, names, *, groups=None, confidence: float = 0.95, log: bool = True,
+              spread=None):
+    """Confidence intervals of the parameters ``x`` (ln values when ``log``); ``spread``
+    as in :func:`inverse_normal_matrix`.
 
     Returns (ci {name: (low, high)}, stderr {name: s.e. of x}, info) where info tells
     the method (``white`` or ``hac``), the Ljung–Box p-value and a note."""
@@ -202,7 +232,7 @@ def intervals(x, J, r, names, *, groups=None, confidence: float = 0.95, log: boo
 
     n, p = J.shape
     s2 = float(r @ r) / max(n - p, 1)
-    JtJ_inv, undetermined, determined = inverse_normal_matrix(J)
+    JtJ_inv, undetermined, determined = inverse_normal_matrix(J, spread)
     se_white = np.sqrt(np.maximum(np.diag(s2 * JtJ_inv), 0))
     p_lb = ljung_box_p(r, groups)
     covs = [s2 * determined]  # on the determined directions (their combinations' intervals)

@@ -149,6 +149,23 @@ def least_squares_log(fun, x0, lb, ub, *, max_nfev: int = 40, diff_step: float =
                      1 <= status <= 4, " ".join(str(message).split()), status == 5)
 
 
+def other_side_jacobian(fun, res: LsqResult, lb, ub, *, diff_step: float, pool=None):
+    """The Jacobian at ``res.x`` by differences of step ``diff_step`` on the other side
+    of each parameter from :func:`least_squares_log`'s (backwards where it stepped
+    forwards); a column whose other side leaves the box is ``res.jac``'s.  Returns (J,
+    simulations).  ``res.jac`` minus it is the columns' curvature and simulation noise
+    (:func:`~pneunet.truth.core.intervals.inverse_normal_matrix`)."""
+    x, f0 = res.x, res.fun
+    steps = -np.where(x + diff_step <= ub, diff_step, -diff_step)
+    inside = (x + steps >= lb) & (x + steps <= ub)
+    todo = np.flatnonzero(inside)
+    jac = res.jac.copy()
+    points = [x + steps * (np.arange(len(x)) == i) for i in todo]
+    for i, col in zip(todo, evaluate_many(fun, points, pool)):
+        jac[:, i] = (col - f0) / steps[i]
+    return jac, len(todo)
+
+
 def refine(fun, res: LsqResult, lb, ub, *, max_nfev: int, diff_step: float, pool=None,
            xtol: float = XTOL) -> LsqResult | None:
     """``res`` (a converged fit, stopped at trust radius ``xtol``) refined: LM on ``fun``
