@@ -72,6 +72,7 @@ def test_resistances_and_volumes_fitted_together_are_undetermined(tanks):
     (direction,) = fit.extras["intervals"]["undetermined"]
     assert sorted(direction["parameters"]) == sorted(TRUTH)
     assert "fix one of them" in fit.extras["intervals"]["note"]
+    assert fit.success or "fix one of the parameters" in fit.unconverged()
     assert fit.rmse["p_t1"] < 0.33 and fit.rmse["p_t2"] < 0.33  # the fit itself is good
 
 

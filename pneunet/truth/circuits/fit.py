@@ -165,9 +165,13 @@ class TraceFit(Summarized):
         if self.success:
             return ""
         why = "on its budget" if self.stopped_on_budget() else f"({self.message})"
+        remedy = ("fix one of the parameters the record does not determine (above): along "
+                  "them the fit wanders without converging"
+                  if self.extras.get("intervals", {}).get("undetermined")
+                  else "raise --max-nfev (max_nfev) or start nearer")
         return (f"the fit stopped {why} after {self.nfev} simulations, before converging: "
-                "the estimates and intervals are where it stopped, not at the best fit; "
-                "raise --max-nfev (max_nfev) or start nearer")
+                f"the estimates and intervals are where it stopped, not at the best fit; "
+                f"{remedy}")
 
 
 def _rms(v) -> float:
