@@ -65,6 +65,29 @@ def test_json_is_the_only_thing_on_stdout(tmp_path, capfd, record):
     assert j["fit"]["values"]["Rvent"] == pytest.approx(3.0, rel=0.02)
 
 
+@pytest.mark.parametrize("ambient", [None, "101.3"])
+def test_gauge_columns_are_made_absolute_with_the_netlists_ambient_or_the_one_given(
+        tmp_path, capfd, record, ambient):
+    """The oscillator vents to its netlist's 96 kPa: a logger's gauge readings against
+    that atmosphere fit as the absolute record does; against a stated 101.3 kPa they
+    are 5.3 kPa higher and fit worse; the note says which barometric pressure was used."""
+    path = tmp_path / "rec.csv"
+    gauge = record.rename(columns={"p_tank_kPa": "p_tank_kPag", "p_out_kPa": "p_out_kPag"})
+    gauge[["p_tank_kPag", "p_out_kPag"]] -= 96.0
+    gauge.to_csv(path, index=False)
+    extra = [] if ambient is None else ["--ambient", ambient]
+    code, out, err = run(capfd, path, "--fit", "Rvent=3.5:1:10", "--set", "V=50",
+                         "--max-nfev", "8", "--json", "--no-progress", *extra)
+    assert code == 0
+    assert f"made absolute with the barometric pressure {ambient or 96} kPa" in err
+    fit = json.loads(out)["fit"]
+    rms = max(fit["rmse"].values())
+    if ambient is None:  # at the noise: the same record as the absolute one
+        assert fit["values"]["Rvent"] == pytest.approx(3.0, rel=0.02) and rms < 0.5
+    else:  # 5.3 kPa above what the circuit can do
+        assert rms > 1.0
+
+
 def test_json_writer_turns_unbounded_interval_ends_into_null():
     """An interval whose upper end overflows (a parameter the data do not bound) is null
     in --json output, which stays valid JSON (json has no Infinity)."""

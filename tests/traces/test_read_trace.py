@@ -25,6 +25,25 @@ def test_pressure_in_bar_and_lower_case_kpa_are_converted_not_dropped(tmp_path, 
     assert "column p_tank_bar read as p_tank_kPa (unit bar)" in df.attrs["notes"]
 
 
+def test_gauge_columns_need_the_barometric_pressure_and_are_made_absolute_with_it(
+        tmp_path, record):
+    """A logger's gauge readings in kPa and psi: refused without the barometric
+    pressure (a located error naming --ambient), absolute with it."""
+    raw = record.rename(columns={"p_tank_kPa": "p_tank_kPag", "p_out_kPa": "p_out_psig"})
+    raw["p_tank_kPag"] = raw["p_tank_kPag"] - 101.2
+    raw["p_out_psig"] = (raw["p_out_psig"] - 101.2) / 6.894757293168361
+    path = tmp_path / "rec.csv"
+    raw.to_csv(path, index=False)
+    with pytest.raises(DataError, match="gauge") as err:
+        read_trace(path)
+    assert "--ambient" in err.value.hint and "rec.csv" in str(err.value)
+    df = read_trace(path, ambient_kpa=101.2)
+    np.testing.assert_allclose(df["p_tank_kPa"], record["p_tank_kPa"], rtol=1e-12)
+    np.testing.assert_allclose(df["p_out_kPa"], record["p_out_kPa"], rtol=1e-12)
+    assert any("p_out_psig made absolute with the barometric pressure 101.2 kPa" in n
+               for n in df.attrs["notes"])
+
+
 def test_a_record_starting_at_1000_s_is_shifted_to_0(tmp_path, record):
     path = tmp_path / "rec.csv"
     record.assign(time_s=record.time_s + 1000.0).to_csv(path, index=False)

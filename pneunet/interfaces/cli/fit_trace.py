@@ -51,6 +51,10 @@ def register(subparsers) -> None:
     p.add_argument("--time-offset", type=float, default=None, metavar="S",
                    help="netlist time of the first sample, s (default: the file's first time "
                         "stamp for a circuit driven by its sources, else 0)")
+    p.add_argument("--ambient", type=float, default=None, metavar="KPA",
+                   help="barometric pressure during the recording, kPa absolute: gauge "
+                        "columns (p_<node>_kPag, _barg, _psig) are made absolute with it "
+                        "(default: the netlist's .options ambient, which its vents see)")
     p.add_argument("--candidates", action="store_true",
                    help="diagnose: rank circuit effects by held-out error, give a verdict")
     p.add_argument("--effect", action="append", default=None, metavar="NAME",
@@ -154,14 +158,20 @@ def main(args) -> int:
     if not params:
         raise ParameterError("nothing to fit", hint="add --fit NAME=GUESS:LOW:HIGH")
     within(args.max_nfev, "--max-nfev", netlist_args.limits(args), "max_samples")
-    data = _recording(args)
     if args.netlist:
         from ...netlist.builder import NetlistBuilder
 
         build = NetlistBuilder(args.netlist, parse=netlist_args.parse_options(args))
-        netlist_args.check_nodes(build.deck().circuit, args.strict)
+        circuit = build.deck().circuit
+        netlist_args.check_nodes(circuit, args.strict)
     else:
         from ...design.circuits import oscillator as build
+
+        circuit = build({})
+    if args.ambient is not None and not (math.isfinite(args.ambient) and args.ambient > 0):
+        raise ParameterError(f"--ambient {args.ambient}: not a pressure",
+                             hint="the barometric pressure in kPa absolute, e.g. 101.3")
+    data = _recording(args, circuit.options.ambient if args.ambient is None else args.ambient)
     _load_effects(args.effects_module)
     quiet = args.no_progress or args.quiet
 
@@ -181,13 +191,14 @@ def main(args) -> int:
     return 0
 
 
-def _recording(args):
+def _recording(args, ambient_kpa):
     """The recording read and checked before any work (its notes on stderr): the
-    columns, and the column of the cycle node ``--node``."""
+    columns (gauge ones made absolute with ``ambient_kpa``), and the column of the cycle
+    node ``--node``."""
     from ...common.errors import DataError
     from ...truth.circuits.data import read_trace
 
-    data = read_trace(args.data, args.signal, max_rows=args.max_rows)
+    data = read_trace(args.data, args.signal, max_rows=args.max_rows, ambient_kpa=ambient_kpa)
     column = f"p_{args.node}_kPa"
     if column not in data:
         pressures = [c[2:-4] for c in data.columns if c.startswith("p_")]

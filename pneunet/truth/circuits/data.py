@@ -80,9 +80,12 @@ JUMP_FRACTION = 0.25
 JUMP_HALF_WIDTH = 2
 
 
-def read_trace(path_or_frame, signals=None, *, max_rows: int | None = TRACE_MAX_ROWS):
+def read_trace(path_or_frame, signals=None, *, max_rows: int | None = TRACE_MAX_ROWS,
+               ambient_kpa: float | None = None):
     """A recorded transient as a DataFrame: ``time_s`` then ``p_<node>_kPa`` /
     ``mdot_<element>_mg_s`` columns (``signals``: only these); ``#`` lines are comments.
+    Gauge columns (``p_tank_kPag``, ``_barg``, ``_psig``) are made absolute with
+    ``ambient_kpa`` (the barometric pressure, kPa), which they need.
 
     Read by :mod:`pneunet.common.csvdata` (file:line errors, streamed, thinned past
     ``max_rows`` rows).  Columns named in another unit (``p_tank_bar``, ``p_tank_kpa``,
@@ -107,7 +110,8 @@ def read_trace(path_or_frame, signals=None, *, max_rows: int | None = TRACE_MAX_
     if isinstance(path_or_frame, pd.DataFrame):
         where = path_or_frame.attrs.get("source", "trace")
         notes = list(path_or_frame.attrs.get("notes", []))
-        rename, units = _plan(list(path_or_frame.columns), signals, where, notes)
+        rename, units = _plan(list(path_or_frame.columns), signals, where, notes,
+                              ambient_kpa)
         wanted = ["time_s"] + [c for c in units if c != "time_s"]
         df = path_or_frame.rename(columns=rename)[wanted].copy()
         df.insert(0, "row", np.arange(1, len(df) + 1))
@@ -123,14 +127,14 @@ def read_trace(path_or_frame, signals=None, *, max_rows: int | None = TRACE_MAX_
         notes = []
         csv_file = open_csv(path_or_frame)
         where = csv_file.source
-        rename, units = _plan(csv_file.columns, signals, where, notes)
+        rename, units = _plan(csv_file.columns, signals, where, notes, ambient_kpa)
         wanted = ["time_s"] + [c for c in units if c != "time_s"]
         inverse = {new: old for old, new in rename.items()}
         table = csv_file.read([inverse.get(c, c) for c in wanted], max_rows=max_rows,
                               what="samples")
         notes.extend(table.notes)
         df = table.frame.rename(columns=rename)[["row", "line"] + wanted]
-    _convert(df, units, where)
+    _convert(df, units, where, ambient_kpa)
     _check_values(df, wanted, where, {new: old for old, new in rename.items()})
     t = df["time_s"].to_numpy()
     origin = float(path_or_frame.attrs.get("time_origin", 0.0)) \
@@ -145,10 +149,11 @@ def read_trace(path_or_frame, signals=None, *, max_rows: int | None = TRACE_MAX_
     return out
 
 
-def _plan(columns, signals, where, notes):
+def _plan(columns, signals, where, notes, ambient_kpa=None):
     """A recording's header read: ({file name: canonical name}, {canonical name:
     ColumnUnit} of time_s and the signals used); DataError for a missing time column,
-    a column that is no signal, a requested signal missing, a gauge column."""
+    a column that is no signal, a requested signal missing, a gauge column without
+    ``ambient_kpa``."""
     rename, units, other = {}, {}, []
     for name in map(str, columns):
         try:
@@ -158,10 +163,14 @@ def _plan(columns, signals, where, notes):
         if cu is None or cu.stem in ("p", "mdot"):
             other.append(name)
             continue
+        if cu.gauge and ambient_kpa is None:
+            raise DataError(f"column {name} holds gauge pressures and no barometric pressure "
+                            "was given", where=where,
+                            hint=f"give it (CLI --ambient KPA), or add it to the values and "
+                                 f"name the column {cu.canonical}")
         if cu.gauge:
-            raise DataError(f"column {name} holds gauge pressures", where=where,
-                            hint=f"a recording needs absolute pressures: add the ambient "
-                                 f"pressure and name the column {cu.canonical}")
+            notes.append(f"column {name} made absolute with the barometric pressure "
+                         f"{ambient_kpa:g} kPa")
         if cu.canonical in units:
             first = next((k for k, v in rename.items() if v == cu.canonical), cu.canonical)
             raise DataError(f"columns {first} and {name} both hold {cu.canonical}", where=where,
@@ -194,7 +203,7 @@ def _plan(columns, signals, where, notes):
     return rename, {"time_s": units["time_s"], **{c: units[c] for c in known}}
 
 
-def _convert(df, units, where) -> None:
+def _convert(df, units, where, ambient_kpa=None) -> None:
     from ...common.errors import ParameterError
     from ...physics.units import to_internal
 
@@ -202,7 +211,8 @@ def _convert(df, units, where) -> None:
         if not cu.is_canonical:
             try:  # a value that overflows becomes inf, which _check_values reports
                 with np.errstate(over="ignore"):
-                    df[c] = to_internal(df[c].to_numpy(), cu.pint_unit, cu.kind, name=c)
+                    df[c] = to_internal(df[c].to_numpy(), cu.pint_unit, cu.kind, name=c,
+                                        gauge=cu.gauge, ambient_kpa=ambient_kpa or 0.0)
             except ParameterError as err:
                 raise DataError(err.message, where=where, hint=err.hint) from None
 
