@@ -217,9 +217,15 @@ def _convert(df, units, where, ambient_kpa=None) -> None:
                 raise DataError(err.message, where=where, hint=err.hint) from None
 
 
+#: a recorded node pressure at or below this (kPa absolute) is no absolute pressure: the
+#: simulator stops there too (engine.single_rate.VACUUM_KPA)
+ABSOLUTE_MIN_KPA = 0.1
+
+
 def _check_values(df, columns, where, names) -> None:
-    """NaN/inf cells, too few rows, times that do not increase: DataError at the line
-    naming the column as the file does (``names``: canonical -> file name)."""
+    """NaN/inf cells, a node pressure at or below vacuum, too few rows, times that do not
+    increase: DataError at the line naming the column as the file does (``names``:
+    canonical -> file name)."""
     at = "line" if "line" in df else "row"
 
     def place(i):
@@ -232,6 +238,17 @@ def _check_values(df, columns, where, names) -> None:
         raise DataError(f"column {names.get(column, column)} has a missing, NaN or infinite "
                         f"value at {place(i[0])}{more}", where=where,
                         hint="remove those rows, or fill them (e.g. interpolate) before fitting")
+    for c in columns:  # a node pressure is absolute: at or below vacuum it is a gauge reading
+        if c.startswith("p_") and c.endswith("_kPa"):
+            low = df[c].to_numpy() <= ABSOLUTE_MIN_KPA
+            if low.any():
+                i = int(np.flatnonzero(low)[0])
+                name = names.get(c, c)
+                raise DataError(f"column {name}: {float(df[c].iloc[i]):g} kPa at {place(i)} is "
+                                f"no absolute pressure (at or below {ABSOLUTE_MIN_KPA:g} kPa)",
+                                where=where, hint=f"gauge readings? name the column "
+                                f"{c[:-4]}_kPag (made absolute with the barometric pressure, "
+                                "--ambient), or check the sensor's unit and offset")
     t = df["time_s"].to_numpy()
     if len(t) < 5:
         raise DataError(f"only {len(t)} rows; a recording needs many samples per cycle",
