@@ -115,8 +115,11 @@ def test_a_dead_volume_that_a_tube_fits_alike_is_named_with_its_fewer_parameters
     parameter, is taken, and the note says so."""
     rec = amplifier_record(10.766, 30.0, dt=0.01, noise=0.3, seed=1,
                            R_line=DRIVEN_TRUTH["Rtube.R"], V=DRIVEN_TRUTH["Amck.V"], V_act=6.0)
+    # from the record's first samples, as when this was found (``auto`` now also fits
+    # from rest driven to the first sample and keeps that: there the dead volume is
+    # still named, but the two no longer fit alike)
     d = diagnose_trace(NetlistBuilder("netlists/amplifier.pn"), rec, DRIVEN_PARAMS,
-                       node="muscle")
+                       node="muscle", start_state="record")
     assert d.verdict == "explained" and d.accepted == ["dead_volume@act"], d.report()
     assert any("cannot tell them apart" in n for n in d.notes), d.notes
     lo, hi = d.final.ci["V_dead@act"]

@@ -129,13 +129,15 @@ def test_mid_run_oscillator_fit_covers_the_truth_where_rest_fails():
 def test_driven_circuit_is_compared_on_its_own_clock_and_covers_the_truth(tmp_path):
     """The amplifier filling a 30 mL actuator through a 0.24 kPa·s/mg line (the netlist
     says 0.2), recorded at 100 Hz from 5.15 s on the sources' clock (mid-fill): the
-    file's clock is kept for the sources, the start is read from the record, no cycle
-    alignment, and both intervals cover the truth."""
+    file's clock is kept for the sources, the start read from the record (forced: `auto`
+    also fits from rest driven to the first sample), no cycle alignment, and both
+    intervals cover the truth."""
     rec = amplifier_record(5.15, 20.0, dt=0.01, noise=0.3, seed=2, R_line=0.24, V=30.0)
     path = tmp_path / "amp.csv"
     rec.to_csv(path, index=False)
     fit = fit_trace(NetlistBuilder(AMPLIFIER), path,
-                    {"Rtube.R": (0.2, 0.02, 2.0), "Amck.V": (25.0, 5.0, 200.0)}, node="muscle")
+                    {"Rtube.R": (0.2, 0.02, 2.0), "Amck.V": (25.0, 5.0, 200.0)}, node="muscle",
+                    start_state="record")  # auto also tries rest driven to the first sample
     state = fit.start_state
     assert state.driven and state.mode == "record"
     assert state.time_offset == pytest.approx(5.15)
@@ -191,13 +193,14 @@ def test_settled_start_is_refused_for_a_driven_circuit():
 def test_unrecorded_storage_is_fitted_from_a_recorded_junction():
     """Only the valves' junction recorded, mid-fill (the actuator unrecorded at ~255 kPa):
     the actuator's pressure that puts the junction at its recorded first value starts
-    the fit, the start is 'record' (not rest: the actuator is far from its 120 kPa), the
+    the fit, the start is 'record' (forced), the
     actuator's initial pressure is fitted (p0@muscle, with an interval covering the
     stand-alone model's own value) and R, V are covered."""
     full = amplifier_record(5.12, 20.0, dt=0.01, noise=0.3, seed=2, R_line=0.24, V=30.0)
     clean = amplifier_record(5.12, 0.05, dt=0.01, noise=0.0, R_line=0.24, V=30.0)
     fit = fit_trace(NetlistBuilder(AMPLIFIER), full[["time_s", "p_act_kPa"]],
-                    {"Rtube.R": (0.2, 0.02, 2.0), "Amck.V": (25.0, 5.0, 200.0)}, node="act")
+                    {"Rtube.R": (0.2, 0.02, 2.0), "Amck.V": (25.0, 5.0, 200.0)}, node="act",
+                    start_state="record")
     assert fit.start_state.mode == "record" and list(fit.start_state.fitted) == ["p0@muscle"]
     truth = {"Rtube.R": 0.24, "Amck.V": 30.0, "p0@muscle": float(clean["p_muscle_kPa"][0])}
     assert all(_covers(fit, truth).values()), (fit.values, fit.ci, truth)
@@ -221,7 +224,8 @@ def test_a_record_starting_just_after_a_switching_covers_the_truth(dt, noise, se
     clean = inverter_record(1.3, 0.1, dt=dt, noise=0.0, Rpull=23.0)
     fit = fit_trace(NetlistBuilder("netlists/inverter.pn"), rec,
                     {"Rpull": (20.0, 2.0, 200.0), "X1.Vout.V": (2.5, 0.2, 20.0),
-                     "X2.Vout.V": (2.5, 0.2, 20.0)}, node="out1", max_nfev=120)
+                     "X2.Vout.V": (2.5, 0.2, 20.0)}, node="out1", max_nfev=120,
+                    start_state="record")
     assert fit.start_state.mode == "record" and fit.success, fit.message
     assert set(fit.start_state.fitted) == {"p0@out1", "p0@out2"}
     truth = {"Rpull": 23.0, "X1.Vout.V": 2.0, "X2.Vout.V": 2.0,
@@ -239,7 +243,7 @@ def test_a_fit_given_a_start_state_fits_its_pressures_as_the_diagnosis_does():
     rec = amplifier_record(5.12, 20.0, dt=0.02, noise=0.3, seed=2, R_line=0.24, V=30.0)
     params = {"Rtube.R": (0.2, 0.02, 2.0), "Amck.V": (25.0, 5.0, 200.0)}
     base = fit_trace(NetlistBuilder(AMPLIFIER), rec[["time_s", "p_act_kPa"]], params,
-                     node="act")
+                     node="act", start_state="record")
     state = base.start_state
     assert list(state.fitted) == ["p0@muscle"]
     again = fit_trace(NetlistBuilder(AMPLIFIER), rec[["time_s", "p_act_kPa"]],

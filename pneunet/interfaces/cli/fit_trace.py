@@ -47,7 +47,9 @@ def register(subparsers) -> None:
                         "recording from switch-on), record (read from the first samples; "
                         "unrecorded storage fitted), settled (an oscillator's settled cycle, "
                         "aligned in phase); auto: rest when the first samples are at rest, "
-                        "else record")
+                        "else record (a driven record off rest: fitted from both record and "
+                        "rest driven to the first sample, rest kept unless record fits 10 %% "
+                        "better)")
     p.add_argument("--time-offset", type=float, default=None, metavar="S",
                    help="netlist time of the first sample, s (default: the file's first time "
                         "stamp for a circuit driven by its sources, else 0)")
