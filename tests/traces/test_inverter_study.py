@@ -111,7 +111,7 @@ def test_a_tube_the_bent_base_fit_hides_is_named_from_its_second_start_on_the_lo
     assert min(apart, 4.0 - apart) < 1e-3
 
 
-@pytest.mark.study
+@pytest.mark.study_long  # 289 s alone, 448 s beside another study (2026-11-28)
 def test_a_loggers_clock_from_zero_on_a_record_far_from_rest_is_not_read_as_switch_on():
     """The tube with another tube as a decoy (~1 min), recorded from 4.08 s after
     switch-on on the logger's clock from 0, 84 ms off the sources' 4 s phase.  Without the
