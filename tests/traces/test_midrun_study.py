@@ -155,7 +155,7 @@ def test_oscillator_heat_exchange_recorded_mid_run_is_named():
         assert lo <= truth <= hi, (k, d.final.values[k], d.final.ci[k])
 
 
-@pytest.mark.study_long  # 291 s of a worker (2026-11-28); unlisted effects stay in CI: tests/diagnose/test_confusion.py
+@pytest.mark.study_long  # 291 s of a worker; CI keeps test_confusion's unlisted effects
 def test_a_supply_ripple_recorded_mid_run_is_unexplained_and_its_waterfall_never_rises():
     """A 12 kPa, 0.37 Hz ripple on the oscillator's supply (outside the library), the
     logger started 4.9 s after switch-on.  Every candidate fits the held-out cycles worse
