@@ -263,18 +263,22 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
         model, guess, df, start_state, time_offset, where)
     if start_state == "auto" and state.mode == "record" and state.driven \
             and state.time_offset > 0:  # the sources' history before the first sample
-        rest = replace(choose_start(model, guess, df, "rest", time_offset, where),
-                       reason="the netlist's rest state driven by its sources to the "
-                              "first sample")
-        if rest.settle > 0:
-            again = dict(fixed=fixed, signals=signals, node=node, window=window,
-                         effects=effects, max_nfev=max_nfev, confidence=confidence,
-                         phase_bins=phase_bins, start=start, features=features,
-                         diff_step=diff_step, options=options, pool=pool, x_start=x_start,
-                         where=where, align=align, time_offset=time_offset,
-                         refined=refined, clock_starts=True)
-            return better_start(*[fit_trace(build, df, params, start_state=s, **again)
-                                  for s in (rest, state)])
+        again = dict(fixed=fixed, signals=signals, node=node, window=window, effects=effects,
+                     max_nfev=max_nfev, confidence=confidence, phase_bins=phase_bins,
+                     start=start, features=features, diff_step=diff_step, options=options,
+                     pool=pool, x_start=x_start, where=where, align=align,
+                     time_offset=time_offset, refined=refined, clock_starts=True)
+        try:  # a rest start that cannot be found or fitted leaves the record's alone
+            rest = choose_start(model, guess, df, "rest", time_offset, where)
+            if rest.settle > 0:
+                rest = fit_trace(build, df, params, start_state=replace(rest, reason=(
+                    "the netlist's rest state driven by its sources to the first sample")),
+                    **again)
+        except PneunetError:
+            rest = None
+        if isinstance(rest, TraceFit):
+            return better_start(rest, fit_trace(build, df, params, start_state=state,
+                                                **again))
     node = node or next((s[2:] for s in sigs if s.startswith("p_")), None)
     settle_until = settling_time(state, times, meas.get(f"p_{node}"),
                                  2 if not state.driven and unset_storage(model, guess, meas)
