@@ -234,6 +234,7 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
     the samples in ln-parameters.  Signals are compared in kPa when all are pressures,
     else each in units of its own noise (:func:`residual_scales`).
     """
+    arguments = dict(locals())  # this call's own, for the fit from a second start
     from ...netlist.builder import require_builder
     from .start import _feature_fit, initial_values
 
@@ -263,11 +264,9 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
         model, guess, df, start_state, time_offset, where)
     if start_state == "auto" and state.mode == "record" and state.driven \
             and state.time_offset > 0:  # the sources' history before the first sample
-        again = dict(fixed=fixed, signals=signals, node=node, window=window, effects=effects,
-                     max_nfev=max_nfev, confidence=confidence, phase_bins=phase_bins,
-                     start=start, features=features, diff_step=diff_step, options=options,
-                     pool=pool, x_start=x_start, where=where, align=align,
-                     time_offset=time_offset, refined=refined, clock_starts=True)
+        again = {k: v for k, v in arguments.items()
+                 if k not in ("build", "data", "params", "start_state")}
+        again.update(where=where, clock_starts=True)
         try:  # a rest start that cannot be found or fitted leaves the record's alone
             rest = choose_start(model, guess, df, "rest", time_offset, where)
             if rest.settle > 0:
