@@ -198,3 +198,101 @@ def test_a_weak_but_determined_direction_stays_determined():
     assert "undetermined" not in info
     ci_plain, se_plain, _ = intervals(x, J, r, ["A", "t1", "t2"])
     assert se == pytest.approx(se_plain)
+
+
+def _two_time_constants(tau2, error):
+    """(x, residual function, forward Jacobian, spread, exact Jacobian) of
+    A·e^(−t/τ₁) + A·e^(−t/τ₂) (A 2, τ₁ 1 s) through a simulator of relative error
+    ``error``, at the truth, the data carrying :func:`_noise`."""
+    from pneunet.truth.core.lsq import LsqResult
+
+    def f(lnA, ln1, ln2):
+        return np.exp(lnA) * (np.exp(-T / np.exp(ln1)) + np.exp(-T / np.exp(ln2)))
+
+    x, h = np.log([2.0, 1.0, tau2]), 5e-3
+    g = _simulated(f, error=error)
+    data = f(*x) + _noise(2)
+
+    def fun(z):
+        return g(*z) - data
+
+    J, other = _forward(g, x, h), _forward(g, x, -h)
+    return x, fun, LsqResult(x, fun(x), J, 0, True, ""), J - other, _jacobian(f, x)
+
+
+def test_a_direction_the_differences_blur_is_measured_by_secants():
+    """τ₂ = 1.2 s through a simulator of error 3e-4: the two Jacobians disagree along the
+    weakest direction more than J·v is (1.37 against 1.75), and every interval was
+    unbounded (the 150 mL, R_vent 4.2 oscillator's fit from its truth, cycles aligned,
+    had the same).  Secants over 0.01–0.1 in ln value resolve it: the standard errors of
+    the exact Jacobian, within 5 %."""
+    from pneunet.truth.core.lsq import secant_checked
+
+    x, fun, res, spread, exact = _two_time_constants(1.2, 3e-4)
+    names = ["A", "t1", "t2"]
+    _, se_before, _ = intervals(x, res.jac, res.fun, names, spread=spread)
+    assert se_before["t1"] == np.inf  # what the differences alone said
+    J, left, simulations, resolved = secant_checked(fun, res, res.jac, spread, x - 3, x + 3)
+    assert resolved >= 1 and 0 < simulations <= 12
+    _, se, info = intervals(x, J, res.fun, names, spread=left)
+    _, se_exact, _ = intervals(x, exact, res.fun, names)
+    assert "undetermined" not in info
+    for k in names:
+        assert se[k] == pytest.approx(se_exact[k], rel=0.05), k
+
+
+def test_a_noise_inflated_direction_gets_its_secant_slope():
+    """τ₂ = 1.1 s, error 1e-4: J·v is above the two Jacobians' disagreement (1.2×) but
+    0.55 against the exact 0.32, so τ's standard errors came out 0.57× the exact ones
+    (intervals that miss).  The secant's slope: within 5 %."""
+    from pneunet.truth.core.lsq import secant_checked
+
+    x, fun, res, spread, exact = _two_time_constants(1.1, 1e-4)
+    names = ["A", "t1", "t2"]
+    _, se_before, _ = intervals(x, res.jac, res.fun, names, spread=spread)
+    _, se_exact, _ = intervals(x, exact, res.fun, names)
+    assert se_before["t1"] < 0.7 * se_exact["t1"]
+    J, left, _, _ = secant_checked(fun, res, res.jac, spread, x - 3, x + 3)
+    _, se, _ = intervals(x, J, res.fun, names, spread=left)
+    for k in names:
+        assert se[k] == pytest.approx(se_exact[k], rel=0.05), k
+
+
+def test_secants_leave_an_invariance_undetermined():
+    """Along R·V = const a secant changes χ² by round-off and the solver's error only:
+    R and V stay unbounded, A and the product determined."""
+    from pneunet.truth.core.lsq import LsqResult, secant_checked
+
+    x, h = np.log([2.0, 0.5, 4.0]), 5e-3
+    f = _simulated(_relaxation)
+    data = _relaxation(*x) + _noise()
+
+    def fun(z):
+        return f(*z) - data
+
+    J, other = _forward(f, x, h), _forward(f, x, -h)
+    res = LsqResult(x, fun(x), J, 0, True, "")
+    J2, left, simulations, resolved = secant_checked(fun, res, J, J - other, x - 3, x + 3)
+    assert resolved == 0 and simulations == 6  # all three steps tried
+    ci, se, info = intervals(x, J2, res.fun, ["A", "R", "V"], spread=left)
+    assert ci["R"] == (0.0, np.inf) and ci["V"] == (0.0, np.inf) and np.isfinite(se["A"])
+    (combo,) = info["undetermined"]
+    assert combo["value"] == pytest.approx(2.0, rel=1e-3)
+
+
+def test_a_weak_direction_no_secant_resolves_gets_the_longest_secant():
+    """τ₂ = 1.05 s, error 3e-5: J·v (0.177) is above the Jacobians' disagreement (0.152)
+    and no secant up to 0.1 changes χ² by 4, yet the one over 0.1 carries 20× less of the
+    solver's error than the difference: τ's standard error goes from 0.90× the exact one
+    to within 3 % of it."""
+    from pneunet.truth.core.lsq import secant_checked
+
+    x, fun, res, spread, exact = _two_time_constants(1.05, 3e-5)
+    names = ["A", "t1", "t2"]
+    _, se_before, _ = intervals(x, res.jac, res.fun, names, spread=spread)
+    _, se_exact, _ = intervals(x, exact, res.fun, names)
+    assert se_before["t1"] < 0.92 * se_exact["t1"]
+    J, left, _, resolved = secant_checked(fun, res, res.jac, spread, x - 3, x + 3)
+    assert resolved == 0
+    _, se, _ = intervals(x, J, res.fun, names, spread=left)
+    assert se["t1"] == pytest.approx(se_exact["t1"], rel=0.03)

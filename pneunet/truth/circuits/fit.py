@@ -22,7 +22,7 @@ import numpy as np
 from ...common.errors import DataError, ParameterError, PneunetError
 from ...common.reprs import Summarized, listed, number
 from ..core.intervals import intervals
-from ..core.lsq import jacobian_spread, least_squares_log, refine
+from ..core.lsq import jacobian_spread, least_squares_log, refine, secant_checked
 from ..core.noise import record_sigma, segments
 from .align import Alignment
 from .clock import CLOCK, clock_fitted, clock_unit, fit_clock
@@ -332,7 +332,8 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
         res, fun, model = refine_fit(res, fun, lb, ub, max_nfev, pool)
         diff_step = REFINE_DIFF_STEP if model.options == REFINE_OPTIONS else diff_step
     jac, spread, checked, cliffs = jacobian_spread(res, fun, lb, ub, diff_step, pool)
-    res = replace(res, nfev=res.nfev + checked, jac=jac)
+    jac, spread, secants, _ = secant_checked(fun, res, jac, spread, lb, ub, pool)
+    res = replace(res, nfev=res.nfev + checked + secants, jac=jac)
     est = dict(zip(names, np.exp(res.x[:len(names)])))
     groups = np.concatenate([np.full(int(fun.keep[s].sum()), i) for i, s in enumerate(sigs)])
     ci, se, info = intervals(res.x, res.jac, res.fun, names + [CLOCK] * bool(clock_step),

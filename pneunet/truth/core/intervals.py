@@ -60,15 +60,10 @@ def inverse_normal_matrix(J, spread=None):
     curvature, a step's fraction of it."""
     _, sv, vt = np.linalg.svd(J, full_matrices=False)
     free = sv <= UNDETERMINED * (sv[0] if sv.size else 0.0)
-    if spread is not None:
-        for k in range(len(sv) - 1, 0, -1):  # from the smallest: the weakest first
-            if free[k]:
-                continue
-            if sv[k] > NOISE_RATIO * float(np.linalg.norm(spread @ vt[k])):
-                break
-            free[k] = True
-            vt[k] = np.where(np.abs(vt[k]) < NOISE_SHARE, 0.0, vt[k])
-            vt[k] /= np.linalg.norm(vt[k])
+    for k in noise_directions(sv, vt, spread, free):
+        free[k] = True
+        vt[k] = np.where(np.abs(vt[k]) < NOISE_SHARE, 0.0, vt[k])
+        vt[k] /= np.linalg.norm(vt[k])
     inv_sq = np.divide(1.0, sv ** 2, out=np.zeros_like(sv), where=~free)
     determined = (vt.T * inv_sq) @ vt
     cov = determined.copy()
@@ -78,6 +73,23 @@ def inverse_normal_matrix(J, spread=None):
         cov[hit, :] = cov[:, hit] = 0.0
         cov[hit, hit] = np.inf
     return cov, directions, determined
+
+
+def noise_directions(sv, vt, spread, free=None, ratio: float = NOISE_RATIO) -> list[int]:
+    """Indices of the right singular vectors ``vt`` of J (singular values ``sv``) along
+    which J·v is within ``ratio`` of ``spread``·v, weakest first, stopping at the first
+    that is not (``free``: those already undetermined by round-off, skipped); [] without
+    a spread."""
+    if spread is None:
+        return []
+    out = []
+    for k in range(len(sv) - 1, 0, -1):  # from the smallest: the weakest first
+        if free is not None and free[k]:
+            continue
+        if sv[k] > ratio * float(np.linalg.norm(spread @ vt[k])):
+            break
+        out.append(k)
+    return out
 
 
 def sandwich_of(bread, meat):
