@@ -171,12 +171,12 @@ def test_lm_stopped_beside_a_cliff_starts_again_away_from_it():
     """From beside the cliff the forward difference in x₀ crosses it: x₀'s column is
     ~2e4 and LM moves x₁ alone, stopping where x₁ fits best for x₀ = 0.3 (cost 0.44).
     The other side's column is 3.2: a cliff; LM starts again 0.1 away from it and finds
-    the bowl's bottom.  The other side's Jacobian comes back with the fit."""
+    the bowl's bottom."""
     lb, ub = np.full(2, -5.0), np.full(2, 5.0)
     res = least_squares_log(_beside_a_cliff, np.array([0.3, 0.0]), lb, ub, max_nfev=200,
                             diff_step=5e-3)
     assert res.success
     assert res.x == pytest.approx([0.1, -0.2], abs=1e-6)
     assert res.fun @ res.fun == pytest.approx(0.0, abs=1e-10)
-    assert res.nfev <= 200 and res.other_jac is not None
-    assert res.other_jac == pytest.approx(res.jac, abs=1e-6)  # smooth at the bottom
+    assert res.nfev <= 200
+    assert res.other_jac is None  # well conditioned at the bottom: no cliff to look for

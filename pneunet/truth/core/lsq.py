@@ -79,8 +79,9 @@ def least_squares_log(fun, x0, lb, ub, *, max_nfev: int = 40, diff_step: float =
     ln-parameters in [lb, ub]), started again away from a cliff of the cost it
     converged beside.
 
-    Where LM converges, the Jacobian is differenced on each parameter's other side too
-    (:func:`other_side_jacobian`, ``other_jac`` of the result).  A column whose two
+    Where LM converges with an ill-conditioned Jacobian (:data:`CHECK_BELOW`; a column
+    that crossed a cliff makes it so), the Jacobian is differenced on each parameter's
+    other side too (:func:`other_side_jacobian`, ``other_jac`` of the result).  A column whose two
     sides differ more than :data:`CLIFF` times crossed a cliff (an oscillation that
     stops): LM stopped because the cliff blocks its model's step, not at a minimum.
     It starts again :data:`BACKOFF` away from the cliff (each such parameter moved
@@ -94,7 +95,8 @@ def least_squares_log(fun, x0, lb, ub, *, max_nfev: int = 40, diff_step: float =
     res = _levenberg_marquardt(fun, x0, lb, ub, max_nfev=max_nfev, diff_step=diff_step,
                                pool=pool, xtol=xtol, ftol=ftol)
     for _ in range(BACKOFFS + 1):
-        if not res.success or max_nfev - res.nfev < 3 * len(res.x) + 2:
+        if not res.success or max_nfev - res.nfev < 3 * len(res.x) + 2 \
+                or not _ill_conditioned(res.jac):  # a cliff's column would make it so
             break
         other, used = other_side_jacobian(fun, res, lb, ub, diff_step=diff_step, pool=pool)
         res = replace(res, nfev=res.nfev + used, other_jac=other)
@@ -265,8 +267,7 @@ def jacobian_spread(res, fun, lb, ub, diff_step: float, pool):
     differ more than :data:`CLIFF` times crossed a cliff of the cost on its larger side
     (the 44.6 mL oscillator's fit lies 0.25 % in R_vent from where its oscillation
     stops): the smaller side's column is kept, and its spread is unknown (zero)."""
-    sv = np.linalg.svd(res.jac, compute_uv=False)
-    if not sv.size or sv[-1] >= CHECK_BELOW * sv[0]:
+    if not _ill_conditioned(res.jac):
         return res.jac, None, 0, []
     if res.other_jac is not None:  # the fit's own cliff check computed it
         other, simulations = res.other_jac, 0
@@ -281,6 +282,13 @@ def jacobian_spread(res, fun, lb, ub, diff_step: float, pool):
         jac[:, i] = other[:, i] if ours[i] > theirs[i] else res.jac[:, i]
         spread[:, i] = 0.0
     return jac, spread, simulations, cliffs.tolist()
+
+
+def _ill_conditioned(jac) -> bool:
+    """Whether ``jac``'s smallest singular value is below :data:`CHECK_BELOW` of its
+    largest."""
+    sv = np.linalg.svd(jac, compute_uv=False)
+    return bool(sv.size) and sv[-1] < CHECK_BELOW * sv[0]
 
 
 #: a Jacobian column whose differences on the two sides of its parameter differ by more
