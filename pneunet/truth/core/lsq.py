@@ -81,27 +81,27 @@ def least_squares_log(fun, x0, lb, ub, *, max_nfev: int = 40, diff_step: float =
 
     Where LM converges with an ill-conditioned Jacobian (:data:`CHECK_BELOW`; a column
     that crossed a cliff makes it so), the Jacobian is differenced on each parameter's
-    other side too (:func:`other_side_jacobian`, ``other_jac`` of the result).  A column whose two
-    sides differ more than :data:`CLIFF` times crossed a cliff (an oscillation that
-    stops): LM stopped because the cliff blocks its model's step, not at a minimum.
-    It starts again :data:`BACKOFF` away from the cliff (each such parameter moved
-    away from the side that crossed it), at most :data:`BACKOFFS` times, and the
-    better end is kept (an unconverged one only when much better: :data:`BACKOFF_GAIN`).  The 150 mL oscillator with a hidden 4 mL dead volume, fitted
-    with it from the screen's 2.9 mL, stopped at 3.2× its noise floor beside the end of
-    its oscillation (R_vent's forward column 44× its backward one), the cost falling
-    all the way to the truth; from 0.1 away it reached the truth.  ``max_nfev`` covers
-    every start and check."""
+    other side too (:func:`other_side_jacobian`, ``other_jac`` of the result).  A column
+    whose two sides differ more than :data:`CLIFF` times crossed a cliff (an oscillation
+    that stops): LM stopped because the cliff blocks its model's step, not at a minimum.
+    It starts again :data:`BACKOFF` away from the cliff (each such parameter moved away
+    from the side that crossed it), at most :data:`BACKOFFS` times, and the better end
+    is kept (an unconverged one only when much better: :data:`BACKOFF_GAIN`).  The
+    150 mL oscillator with a hidden 4 mL dead volume, fitted with it from the screen's
+    2.9 mL, stopped at 3.2× its noise floor beside the end of its oscillation (R_vent's
+    forward column 44× its backward one), the cost falling all the way to the truth;
+    from 0.1 away it reached the truth.  ``max_nfev`` covers every start and check."""
     lb, ub = np.asarray(lb, float), np.asarray(ub, float)
     res = _levenberg_marquardt(fun, x0, lb, ub, max_nfev=max_nfev, diff_step=diff_step,
                                pool=pool, xtol=xtol, ftol=ftol)
-    for _ in range(BACKOFFS + 1):
+    for attempt in range(BACKOFFS + 1):
         if not res.success or max_nfev - res.nfev < 3 * len(res.x) + 2 \
                 or not _ill_conditioned(res.jac):  # a cliff's column would make it so
             break
         other, used = other_side_jacobian(fun, res, lb, ub, diff_step=diff_step, pool=pool)
         res = replace(res, nfev=res.nfev + used, other_jac=other)
         cliffs = _cliffs(res.jac, other)
-        if not cliffs.size or _ == BACKOFFS:
+        if not cliffs.size or attempt == BACKOFFS:
             break
         forward = np.where(res.x + diff_step <= ub, 1.0, -1.0)  # the side res.jac took
         crossed = np.where(np.linalg.norm(res.jac, axis=0) > np.linalg.norm(other, axis=0),
