@@ -34,6 +34,7 @@ def test_an_oscillator_fitted_from_its_truth_has_intervals_that_cover_it():
                     max_nfev=60)
     assert fit.error() < 1.05 * 0.35
     assert "undetermined" not in fit.extras["intervals"], fit.extras["intervals"]["note"]
+    assert "measured by secants" in fit.extras["intervals"]["secant_note"]
     for name, true in TRUTH.items():
         lo, hi = fit.ci[name]
         assert lo < true < hi and np.log(hi / lo) < 0.05, (name, fit.ci[name])

@@ -22,7 +22,8 @@ import numpy as np
 from ...common.errors import DataError, ParameterError, PneunetError
 from ...common.reprs import Summarized, listed, number
 from ..core.intervals import intervals
-from ..core.lsq import jacobian_spread, least_squares_log, refine, secant_checked
+from ..core.lsq import (jacobian_spread, least_squares_log, refine, secant_checked,
+                        secant_note)
 from ..core.noise import record_sigma, segments
 from .align import Alignment
 from .clock import CLOCK, clock_fitted, clock_unit, fit_clock
@@ -332,14 +333,17 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
         res, fun, model = refine_fit(res, fun, lb, ub, max_nfev, pool)
         diff_step = REFINE_DIFF_STEP if model.options == REFINE_OPTIONS else diff_step
     jac, spread, checked, cliffs = jacobian_spread(res, fun, lb, ub, diff_step, pool)
-    jac, spread, secants, _ = secant_checked(fun, res, jac, spread, lb, ub, pool)
+    jac, spread, secants, measured = secant_checked(fun, res, jac, spread, lb, ub, pool)
     res = replace(res, nfev=res.nfev + checked + secants, jac=jac)
     est = dict(zip(names, np.exp(res.x[:len(names)])))
     groups = np.concatenate([np.full(int(fun.keep[s].sum()), i) for i, s in enumerate(sigs)])
     ci, se, info = intervals(res.x, res.jac, res.fun, names + [CLOCK] * bool(clock_step),
                              groups=groups, confidence=confidence, spread=spread)
+    named = names + [CLOCK] * bool(clock_step)
+    if measured:
+        info["secant_note"] = secant_note(measured, named, diff_step)
+        info["note"] += "; " + info["secant_note"]
     if cliffs:
-        named = names + [CLOCK] * bool(clock_step)
         info["cliff_note"] = (
             f"{', '.join(named[i] for i in cliffs)}: a difference step ({diff_step:.2g} in "
             "ln value) to one side changes the fit abruptly (the circuit behaves otherwise "
