@@ -12,6 +12,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from .intervals import NOISE_RATIO, noise_directions
+
 
 @dataclass
 class LsqResult:
@@ -317,11 +319,10 @@ SECANT_RATIO = 3.0
 
 def secant_checked(fun, res, jac, spread, lb, ub, pool=None):
     """(Jacobian, spread, simulations, the unit directions J was measured along): each
-    direction v along
-    which ``jac``·v is within :data:`SECANT_RATIO` of the differences' noise
-    (``spread``·v, :func:`~pneunet.truth.core.intervals.noise_directions`), weakest
-    first, measured again by a secant of the residual over :data:`SECANT_STEPS` until
-    one changes χ² by :data:`SECANT_CHI2` (resolved).  Its J·v becomes the secant's
+    direction v along which ``jac``·v is within :data:`SECANT_RATIO` of the
+    differences' noise (``spread``·v, :func:`~pneunet.truth.core.intervals.
+    noise_directions`), weakest first, measured again by a secant of the residual over
+    :data:`SECANT_STEPS` until one changes χ² by :data:`SECANT_CHI2` (resolved).  Its J·v becomes the secant's
     and its spread 0; so it does where no step resolves it but J·v is above the noise
     (the secant over 0.1 carries 20× less of the simulation's error than a 0.005
     difference); where J·v is within the noise and no step resolves it, the direction
@@ -332,8 +333,6 @@ def secant_checked(fun, res, jac, spread, lb, ub, pool=None):
     had ‖J·v‖ 71 against a spread of 116, and secants of 73 at every step; every
     interval was unbounded), where an exact invariance of the model changes χ² by 0.05
     over 10 % (two tanks' R·V)."""
-    from .intervals import NOISE_RATIO, noise_directions
-
     if spread is None:
         return jac, spread, 0, []
     _, sv, vt = np.linalg.svd(jac, full_matrices=False)
