@@ -107,6 +107,23 @@ def test_driven_physics_outside_the_library_is_unexplained(case):
 
 
 @pytest.mark.study
+def test_a_dead_volume_the_screen_misses_is_found_through_the_tube_that_fits_it():
+    """The amplifier of other values (R_line 0.4, V 50 mL) with 4 mL between its valves,
+    from 7.3 s: the dead volume's best grid point (1.0 mL) had it screened out, and the
+    record was `explained` by ``tube@Xin.out`` (R 0.0073, V 3.997 mL: the same volume at
+    the same node).  The dead volume at a fitted tube's node is fitted from the tube's
+    volume, and fits alike with fewer parameters."""
+    rec = amplifier_record(7.3, 30.0, dt=0.01, noise=0.35, seed=17, R_line=0.4, V=50.0,
+                           V_act=4.0)
+    d = diagnose_trace(NetlistBuilder("netlists/amplifier.pn"), rec, DRIVEN_PARAMS,
+                       node="muscle")
+    assert d.verdict == "explained" and d.accepted == ["dead_volume@act"], d.report()
+    for k, truth in {"Rtube.R": 0.4, "Amck.V": 50.0, "V_dead@act": 4.0}.items():
+        lo, hi = d.final.ci[k]
+        assert lo <= truth <= hi, (k, lo, hi)
+
+
+@pytest.mark.study
 def test_a_dead_volume_that_a_tube_fits_alike_is_named_with_its_fewer_parameters():
     """The 6 mL dead volume between the valves, recorded from 10.77 s (the driven study's
     seed 1): a tube at the in-valve's output (R 0.012, V 5.98 mL) and the dead volume
