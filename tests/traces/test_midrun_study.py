@@ -1,7 +1,8 @@
 """Recordings as a logger makes them, diagnosed whole (issue 31; one to four minutes each).
 CI runs the ``study`` cases (``python -m pytest -m study``): the new user's recording, the
-oscillator's heat exchange and a supply ripple recorded mid-run, the clean driven one and
-heat plus a tube at once (both effects named).  The single effects, the leak and the
+oscillator's heat exchange and a supply ripple recorded mid-run, the clean driven one,
+heat plus a tube at once (both effects named) and, on an amplifier of other values, a
+dead volume the screen leaves out, found through the tube that fits it.  The single effects, the leak and the
 compliant actuator (outside the library; 4–5 min each) are ``study_long``
 (``python -m pytest -m study_long``;
 ``benchmarks/study_trace_diagnosis.py --driven`` runs the same cases for its table).
