@@ -1,9 +1,9 @@
 """Recordings as a logger makes them, diagnosed whole (issue 31; one to four minutes each).
 CI runs the ``study`` cases (``python -m pytest -m study``): the new user's recording, the
-oscillator's heat exchange and a supply ripple recorded mid-run, the clean driven one,
-heat plus a tube at once (both effects named) and, on an amplifier of other values, a
-dead volume the screen leaves out, found through the tube that fits it.  The single effects, the leak and the
-compliant actuator (outside the library; 4–5 min each) are ``study_long``
+oscillator's heat exchange recorded mid-run, the clean driven one and, on an amplifier of
+other values, a dead volume the screen leaves out, found through the tube that fits it.
+The single effects, heat plus a tube at once (both effects named; 4.6 min), the leak and
+the compliant actuator (outside the library; 4–5 min each) are ``study_long``
 (``python -m pytest -m study_long``;
 ``benchmarks/study_trace_diagnosis.py --driven`` runs the same cases for its table).
 
@@ -92,7 +92,7 @@ LONG = pytest.mark.study_long
     pytest.param((("V_act", 6.0),), {"dead_volume@act"}, marks=LONG),
     pytest.param((("tube_ctrl", (5.0, 5.0)),), {"tube@Xin.ctrl"}, marks=LONG),
     pytest.param((("heat_tau", 1.0), ("tube_ctrl", (5.0, 5.0))),
-                 {"volume_heat_transfer", "tube@Xin.ctrl"}, marks=pytest.mark.study),
+                 {"volume_heat_transfer", "tube@Xin.ctrl"}, marks=LONG),
 ])
 def test_driven_hidden_effect_is_named(case, expected):
     d = driven(case)
