@@ -69,3 +69,20 @@ def test_heat_exchange_changes_only_the_volumes_the_circuit_had():
         assert kinds["Vtube_X1_ctrl"] == "volume"
         assert [n for n, k in kinds.items() if k in ("thermal_volume", "thermal_chamber")] \
             == ["V1"]
+
+
+def test_a_tube_with_its_volume_has_the_dead_volume_at_its_node_as_its_limit():
+    """R → 0: the tube's volume at the node it joins (the amplifier's Xin.out and
+    Xout.in are both at ``act``); a tube without a volume of its own has no such limit."""
+    from pneunet.netlist.builder import NetlistBuilder
+    from pneunet.truth.circuits.effects import Tube
+
+    circuit = NetlistBuilder("netlists/amplifier.pn")({})
+    for port, element in (("out", "Xin"), ("in", "Xout")):
+        site = f"{element}.{port}"
+        tube = Tube(element, port)
+        assert tube.limits(circuit, {f"R_tube@{site}": 0.007, f"V_tube@{site}": 3.9}) == \
+            [("dead_volume@act", {"V_dead@act": 3.9})]
+        assert {name for name, _ in tube.limits(circuit, {f"V_tube@{site}": 1.0})} <= \
+            {e.name for e in candidates_for(circuit)}
+    assert Tube("Xin", "out", with_volume=False).limits(circuit, {}) == []

@@ -276,32 +276,23 @@ def _fit_row(row, fits, fitting, max_nfev, say) -> None:
         fits[eff.name] = fit
 
 
-def tube_volumes(fits, cand, circuit, fitting, max_nfev, say) -> None:
-    """Parsimony: the dead volume at the node of each fitted tube (a candidate not fitted
-    yet) fitted from the tube's volume, for the ranking to take where the two fit alike
-    (it has fewer parameters).  A tube of small resistance is a volume at its node: the
-    driven amplifier's 4 mL between its valves was named ``tube@Xin.out`` (R 0.0073,
-    V 3.997 mL, a time constant of 0.3 ms at 100 Hz), while ``dead_volume@act``'s best
-    grid point, 1.0 mL, had it screened out."""
-    from ...physics import elements
-    from .effects import DeadVolume, Tube
-
+def fit_limits(fits, cand, circuit, fitting, max_nfev, say) -> None:
+    """Parsimony: each fitted single effect's simpler limits
+    (:meth:`~pneunet.truth.circuits.effects.CircuitEffect.limits`, a tube's dead volume at
+    its node) that are candidates not fitted yet, fitted from its values, for the ranking
+    to take where the two fit alike (the limit has fewer parameters)."""
+    by_name = {e.name: e for e in cand}
     for fit in [f for n, f in fits.items() if n != "none" and len(f.effects) == 1]:
-        tube = fit.effects[0]
-        if not isinstance(tube, Tube) or not tube.with_volume:
-            continue
-        spec = circuit.elements[tube.element]
-        node = spec.nodes[elements.family(spec.kind).ports.index(tube.port)]
-        dead = next((e for e in cand if isinstance(e, DeadVolume) and e.node == node), None)
-        if dead is None or dead.name in fits:
-            continue
-        say(f"fitting {dead.name} from {tube.name}'s volume")
-        start = {k: v for k, v in fit.values.items() if k in fitting.params}
-        start[f"V_dead@{node}"] = fit.values[f"V_tube@{tube.element}.{tube.port}"]
-        again = fitting.start(dead, start, max_nfev, f"{tube.name}'s volume",
-                              fit.start_state)
-        if again is not None:
-            fits[dead.name] = again
+        eff = fit.effects[0]
+        for name, values in eff.limits(circuit, fit.values):
+            if name not in by_name or name in fits:
+                continue
+            say(f"fitting {name} from {eff.name}'s values")
+            start = {k: v for k, v in fit.values.items() if k in fitting.params}
+            again = fitting.start(by_name[name], {**start, **values}, max_nfev,
+                                  f"{eff.name}'s values", fit.start_state)
+            if again is not None:
+                fits[name] = again
 
 
 def second_effects(fits, best, fitted, cand, params, fitting, model_setup, df, train, pool,

@@ -30,9 +30,9 @@ from ..core.noise import ROUNDING_SIGMA, difference_sigma, resolution, segments
 from ..core.verdict import (TOLERANCE, Step, at_floor, decide, needs_candidates,
                             untested_note)
 from ..core.waterfall import Waterfall
-from .candidate_fits import (CandidateFits, at_bound, base_refit, fit_pairs, fit_screened,
-                             ranked, refine_final, second_effects, screen_data,
-                             single_refit_from_pair, tube_volumes, unfitted_row)
+from .candidate_fits import (CandidateFits, at_bound, base_refit, fit_limits, fit_pairs,
+                             fit_screened, ranked, refine_final, second_effects,
+                             screen_data, single_refit_from_pair, unfitted_row)
 from .data import read_trace, signal_of_column, signal_unit, split_by_cycles
 from .effects import candidates_for
 from .fit import TraceFit, fit_trace
@@ -278,7 +278,7 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
             timing["screen_s"] = time.perf_counter() - t0
             t0 = time.perf_counter()
             fit_screened(rows, fits, fitting, screen, 4 * max_nfev, say)
-            tube_volumes(fits, cand, circuit, fitting, 4 * max_nfev, say)
+            fit_limits(fits, cand, circuit, fitting, 4 * max_nfev, say)
             timing["candidate_fits_s"] = time.perf_counter() - t0
             fitted, alike = ranked(fits, fitting)
             if alike:

@@ -53,6 +53,13 @@ class CircuitEffect(ABC):
         """The bound effects this kind offers for ``circuit`` (default: itself)."""
         return [self]
 
+    def limits(self, circuit, values: dict) -> list[tuple[str, dict]]:
+        """Simpler effects this one becomes in a limit of its parameters: (the simpler
+        effect's name, its parameters' values taken from ``values``, this effect's
+        fitted ones) each.  The diagnosis fits those the screen left out from there
+        (default: none)."""
+        return []
+
     def grid(self) -> list[dict]:
         """Parameter points the screen tries: per parameter :data:`GRID_POINTS` values
         log-spaced inside (low, high) (at 1/2n, 3/2n … of the log range), all
@@ -287,6 +294,20 @@ class Tube(CircuitEffect):
                 # a tube before a volume: its own volume merges with the vessel's
                 out.append(Tube(s.name, port, with_volume=k not in fam.storage_ports))
         return out
+
+    def limits(self, circuit, values):
+        """A tube of vanishing resistance is its volume at the node it joins: the dead
+        volume there (the driven amplifier's 4 mL between its valves was named
+        ``tube@Xin.out``, R 0.0073, V 3.997 mL, where the dead volume's best grid point,
+        1.0 mL, had it screened out)."""
+        from ...physics import elements
+
+        if not self.with_volume:
+            return []
+        spec = circuit.elements[self.element]
+        node = spec.nodes[elements.family(spec.kind).ports.index(self.port)]
+        return [(f"dead_volume@{node}",
+                 {f"V_dead@{node}": values[f"V_tube@{self.element}.{self.port}"]})]
 
     def apply(self, circuit, values):
         from ...physics import elements
