@@ -102,14 +102,11 @@ def least_squares_log(fun, x0, lb, ub, *, max_nfev: int = 40, diff_step: float =
             break
         other, used = other_side_jacobian(fun, res, lb, ub, diff_step=diff_step, pool=pool)
         res = replace(res, nfev=res.nfev + used, other_jac=other)
-        cliffs = _cliffs(res.jac, other)
-        if not cliffs.size or attempt == BACKOFFS:
+        crossed = _cliffs(res.jac, other)
+        if not crossed.any() or attempt == BACKOFFS:
             break
-        forward = np.where(res.x + diff_step <= ub, 1.0, -1.0)  # the side res.jac took
-        crossed = np.where(np.linalg.norm(res.jac, axis=0) > np.linalg.norm(other, axis=0),
-                           forward, -forward)
-        away = np.zeros(len(res.x))
-        away[cliffs] = -crossed[cliffs]
+        # away from each cliff: against the side that crossed it (res.jac's forward)
+        away = -crossed * np.where(res.x + diff_step <= ub, 1.0, -1.0)
         start = np.clip(res.x + BACKOFF * away / np.linalg.norm(away), lb, ub)
         again = _levenberg_marquardt(fun, start, lb, ub, max_nfev=max_nfev - res.nfev,
                                      diff_step=diff_step, pool=pool, xtol=xtol, ftol=ftol)
@@ -276,14 +273,12 @@ def jacobian_spread(res, fun, lb, ub, diff_step: float, pool):
     else:
         other, simulations = other_side_jacobian(fun, res, lb, ub, diff_step=diff_step,
                                                  pool=pool)
-    ours, theirs = np.linalg.norm(res.jac, axis=0), np.linalg.norm(other, axis=0)
-    cliffs = _cliffs(res.jac, other)
+    crossed = _cliffs(res.jac, other)
     spread = res.jac - other
     jac = res.jac.copy()
-    for i in cliffs:
-        jac[:, i] = other[:, i] if ours[i] > theirs[i] else res.jac[:, i]
-        spread[:, i] = 0.0
-    return jac, spread, simulations, cliffs.tolist()
+    jac[:, crossed > 0] = other[:, crossed > 0]
+    spread[:, crossed != 0] = 0.0
+    return jac, spread, simulations, np.flatnonzero(crossed).tolist()
 
 
 def _ill_conditioned(jac) -> bool:
@@ -299,10 +294,11 @@ CLIFF = 10.0
 
 
 def _cliffs(jac, other):
-    """Indices of the columns of two Jacobians (differences on either side) that differ
-    more than :data:`CLIFF` times in norm."""
+    """Per column of two Jacobians (differences on either side of each parameter): +1
+    where ``jac``'s is more than :data:`CLIFF` times ``other``'s in norm (its side
+    crossed a cliff), −1 where ``other``'s is, else 0."""
     ours, theirs = np.linalg.norm(jac, axis=0), np.linalg.norm(other, axis=0)
-    return np.flatnonzero((ours > CLIFF * theirs) | (theirs > CLIFF * ours))
+    return np.where(ours > CLIFF * theirs, 1, np.where(theirs > CLIFF * ours, -1, 0))
 
 
 #: steps (ln value along a unit direction), smallest first, of the secants that measure a
