@@ -6,9 +6,12 @@ cycle as 0.5–0.9 kPa and pulled R_vent and V 2–6 standard errors off the tru
 
 The recording and the "simulation" are the same stand-alone oscillator curve
 (tests/traces/standalone.py), so the right model times are the recorded times."""
-import numpy as np
+import math
 
-from pneunet.truth.circuits.align import Alignment
+import numpy as np
+import pytest
+
+from pneunet.truth.circuits.align import Alignment, thinning
 
 from .standalone import oscillator_record
 
@@ -27,3 +30,17 @@ def test_a_noisy_record_is_aligned_to_the_same_curve_within_a_fraction_of_a_ms()
     # the residual left is the noise: the sample-by-sample rms at the aligned times
     rms = np.sqrt(np.mean((np.interp(model, t_fine, y_fine) - noisy)[after] ** 2))
     assert rms < 0.27
+
+
+@pytest.mark.parametrize("dt", [0.1, 0.05, 0.03, 0.02, 0.01])
+def test_a_record_sampled_finer_than_a_difference_step_resolves_is_thinned(dt):
+    """One sample in k, k the fewest spacings a 0.5 % change of the period moves the end of
+    a cycle by: the period from the clean curve's own rising crossings."""
+    clean = oscillator_record(40.0, dt=dt, noise=0.0, V=200.0, Rvent=3.5, V_out=3.0)
+    t, y = clean["time_s"].to_numpy(), clean["p_tank_kPa"].to_numpy()
+    level = 0.5 * (y[t > 20].min() + y[t > 20].max())
+    up = np.flatnonzero((y[:-1] < level) & (y[1:] >= level))
+    period = float(np.median(np.diff(t[up])))
+    noisy = y + 0.3 * np.random.default_rng(4).standard_normal(t.size)
+    assert thinning(t, noisy, 0.005) == math.ceil(0.005 * period / dt)
+    assert thinning(t, 200.0 - 100.0 * np.exp(-t / 3.0), 0.005) == 1  # no oscillation

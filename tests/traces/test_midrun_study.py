@@ -1,7 +1,8 @@
 """Recordings as a logger makes them, diagnosed whole (issue 31; one to four minutes each).
-CI runs the ``study`` cases (``python -m pytest -m study``): the new user's recording, the
-oscillator's heat exchange recorded mid-run, the clean driven one and, on an amplifier of
-other values, a dead volume the screen leaves out, found through the tube that fits it.
+CI runs the ``study`` cases (``python -m pytest -m study``): the new user's recording, an
+oscillator of other values sampled at 50 Hz, the oscillator's heat exchange recorded
+mid-run, the clean driven one and, on an amplifier of other values, a dead volume the
+screen leaves out, found through the tube that fits it.
 The single effects, heat plus a tube at once (both effects named; 4.6 min), the leak and
 the compliant actuator (outside the library; 4–5 min each) are ``study_long``
 (``python -m pytest -m study_long``;
@@ -61,6 +62,29 @@ def test_new_users_mid_run_recording_is_explained_by_the_dead_volume(tmp_path, d
     for row in j["ranking"][1:]:
         assert row["status"] in ("fitted", "screened out", "failed")
         assert row["status"] != "screened out" or row["screen_rms"] is not None
+
+
+@pytest.mark.study
+def test_an_oscillator_sampled_finer_than_its_fits_resolve_is_fitted_on_fewer_samples():
+    """Other values, 50 Hz: the 240 mL oscillator (R_out 1.0) with a hidden 3 mL dead
+    volume, from 9.9 s, 8.8 s cycles.  A difference step of 0.005 moves a cycle's end by
+    2.2 samples; fitted on every sample, each dead-volume fit stopped at 2.5–4.9× the
+    floor and a wrong pair (dead volume + supply tube, 1.22×) was accepted with every
+    interval missing the truth.  On one sample in 3: the dead volume, intervals covering."""
+    rec = oscillator_record(49.9, dt=0.02, noise=0.4, seed=23, V=240.0, Rvent=3.5,
+                            Rout=1.0, V_out=3.0)
+    rec = rec[rec["time_s"] >= 9.9 - 1e-9].reset_index(drop=True)
+    rec["time_s"] -= rec["time_s"].iloc[0]
+    d = diagnose_trace(NetlistBuilder("netlists/oscillator.pn"), rec,
+                       {"Rout": (1.4, 0.3, 5.0), "Rvent": (3.8, 0.5, 20.0),
+                        "Vtank.V": (250.0, 50.0, 600.0)}, node="tank")
+    j = d.to_json()
+    assert j["fitted_every_nth_sample"] == 3
+    assert any("one sample in 3" in n for n in j["notes"])
+    assert j["verdict"] == "explained" and j["accepted"] == ["dead_volume@out"], d.report()
+    for k, truth in {"Rout": 1.0, "Rvent": 3.5, "Vtank.V": 240.0, "V_dead@out": 3.0}.items():
+        lo, hi = j["fit"]["ci"][k]
+        assert lo <= truth <= hi, (k, lo, hi)
 
 
 @functools.lru_cache(maxsize=None)

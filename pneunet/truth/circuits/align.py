@@ -17,6 +17,7 @@ the crossing's own noise does not stand in the cycle's residual.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -157,3 +158,22 @@ class Alignment:
                 s += float(np.clip(-(r @ slope) / denom, -dt, dt))
             out[idx] = s
         return out
+
+
+def thinning(times, values, step: float) -> int:
+    """Every how many samples an oscillating record ``values(times)`` is fitted while
+    candidate effects are ranked: the smallest k for which a change of ``step`` in ln
+    value of a parameter its period scales with moves the end of a cycle by at most k
+    sample spacings (1 for a record that does not oscillate).  Each cycle ends at an
+    edge a sample or two wide: sampled finer, the cost is rugged at the scale of the
+    fit's difference step, and LM stops between its kinks (the 240 mL oscillator at
+    50 Hz, 8.8 s cycles, with a hidden 3 mL dead volume: every fit of the dead volume
+    stopped 2.5–4.9× the noise floor, and a wrong pair was accepted; every 2nd sample:
+    the dead volume at the floor, every interval covering the truth)."""
+    times = np.asarray(times, float)
+    aligned = Alignment.of(times, values, "")
+    if aligned is None or len(times) < 2:
+        return 1
+    spacing = float(np.median(np.diff(times)))
+    period = float(np.median(np.diff(aligned.starts)))
+    return max(1, math.ceil(step * period / spacing - 1e-9))

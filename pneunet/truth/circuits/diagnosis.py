@@ -1,5 +1,7 @@
 """From a recorded circuit trace to the missing physics: the truth-finding pipeline.
 
+0. an oscillating record sampled finer than the fits' difference step resolves is
+   fitted on one sample in k (:func:`~pneunet.truth.circuits.align.thinning`);
 1. fit the base model on the first cycles (:func:`~pneunet.truth.circuits.fit.fit_trace`);
 2. the noise floor from the data alone: robust second differences of the residuals
    over the whole record (:mod:`pneunet.truth.core.noise`), per signal, pooled;
@@ -36,7 +38,8 @@ from .candidate_fits import (CandidateFits, at_bound, base_refit, fit_limits, fi
 from .data import read_trace, signal_of_column, signal_unit, split_by_cycles
 from .effects import candidates_for
 from .fit import TraceFit, fit_trace
-from .model import FIT_OPTIONS, TraceModel
+from .align import thinning
+from .model import DIFF_STEP, FIT_OPTIONS, TraceModel
 from .screen import screen_candidates
 
 #: the base fit's cap on simulations, × ``max_nfev``: a fit that stops on its budget
@@ -64,6 +67,7 @@ class TraceDiagnosis(Summarized):
     timing: dict = field(default_factory=dict)
     notes: list = field(default_factory=list)
     signals: dict = field(default_factory=dict)  # per signal, in its unit: signal_table
+    fitted_every: int = 1  # every fit on one sample in this many (align.thinning)
 
     def _summary(self):
         rows = [("accepted", listed(self.accepted) or "nothing"),
@@ -90,6 +94,7 @@ class TraceDiagnosis(Summarized):
                 "where": list(self.where), "noise": self.noise,
                 "train_window": list(self.train_window), "test_window": list(self.test_window),
                 "timing": self.timing, "notes": list(self.notes),
+                "fitted_every_nth_sample": self.fitted_every,
                 "signals": {k: {f: v if f in ("unit", "at_floor") else _num(v)
                                 for f, v in row.items()}
                             for k, row in self.signals.items()}}
@@ -229,8 +234,16 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
     df = read_trace(data, signals)
     where = df.attrs["source"]
     options = FIT_OPTIONS if options is None else options
-    train, test = split_by_cycles(df, node, train_fraction, where=where,
-                                  driven=_sources_vary(build, fixed, params, options, df))
+    driven = _sources_vary(build, fixed, params, options, df)
+    train, test = split_by_cycles(df, node, train_fraction, where=where, driven=driven)
+    thin = 1
+    if not driven and f"p_{node}_kPa" in df:
+        thin = thinning(df["time_s"].to_numpy(float), df[f"p_{node}_kPa"].to_numpy(float),
+                        DIFF_STEP)
+        if thin > 1:  # every fit on every thin-th sample
+            attrs, thinned_from = dict(df.attrs), df
+            df = df.iloc[::thin].reset_index(drop=True)
+            df.attrs = attrs
     timing = {}
     pool = process_pool(workers)
     try:
@@ -253,6 +266,8 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
         steps = [Step("base model", base_err, train=base.error(train))]
         ranking = [_row("none", base, test, floor)]
         notes = [f"base fit: {base.extras['intervals']['note']}"]
+        if thin > 1:
+            notes.append(thinned_note(thinned_from, thin, node))
         if train == test:
             notes.append("nothing is held out: a record of a circuit driven by its sources "
                          "with fewer than two cycles at the node is fitted whole, and its "
@@ -359,7 +374,20 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
     wf = Waterfall(steps, floor, unit)
     return TraceDiagnosis(verdict, accepted, floor, unit, ranking, fits, wf, where_txt,
                           {k: v for k, v in noise.items()}, train, test, timing, notes,
-                          signal_table(base, final, test, noise, tolerance))
+                          signal_table(base, final, test, noise, tolerance), thin)
+
+
+def thinned_note(df, thin: int, node: str) -> str:
+    """The diagnosis's note on a record whose candidates were fitted on every
+    ``thin``-th sample (:func:`~pneunet.truth.circuits.align.thinning`)."""
+    t = df["time_s"].to_numpy(float)
+    rate = 1.0 / float(np.median(np.diff(t)))
+    return (f"fitted on one sample in {thin} ({rate / thin:.3g} of {rate:.3g} Hz): at the "
+            f"full rate a difference step of {DIFF_STEP:g} in ln "
+            f"value moves the end of a cycle at {node} by more than a sample, and the fits "
+            "stop between the kinks that edges a sample wide put in the cost (so does the "
+            "final fit, and its intervals miss: the values and intervals reported are those "
+            "of the samples fitted)")
 
 
 def _sources_vary(build, fixed, params, options, df) -> bool:

@@ -14,7 +14,9 @@ VERDICT_TEXT = {
 def format_report(d) -> str:
     L = ["[[Diagnosis: circuit vs recording]]"]
     L.append(f"    fitted on     = {d.train_window[0]:g} … {d.train_window[1]:.4g} s, held out "
-             f"{d.test_window[0]:.4g} … {d.test_window[1]:.4g} s")
+             f"{d.test_window[0]:.4g} … {d.test_window[1]:.4g} s"
+             + (f", one sample in {d.fitted_every} (see the notes)" if d.fitted_every > 1
+                else ""))
     if d.final.start_state is not None:
         L.append(f"    start state   = {d.final.start_state.describe()}")
     L.append(f"    noise floor   = {d.noise_floor:.3g} {d.unit} (estimated from the data: "
