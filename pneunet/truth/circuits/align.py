@@ -161,15 +161,15 @@ class Alignment:
 
 
 def thinning(times, values, step: float) -> int:
-    """Every how many samples an oscillating record ``values(times)`` is fitted while
-    candidate effects are ranked: the smallest k for which a change of ``step`` in ln
-    value of a parameter its period scales with moves the end of a cycle by at most k
-    sample spacings (1 for a record that does not oscillate).  Each cycle ends at an
-    edge a sample or two wide: sampled finer, the cost is rugged at the scale of the
-    fit's difference step, and LM stops between its kinks (the 240 mL oscillator at
-    50 Hz, 8.8 s cycles, with a hidden 3 mL dead volume: every fit of the dead volume
-    stopped 2.5–4.9× the noise floor, and a wrong pair was accepted; every 2nd sample:
-    the dead volume at the floor, every interval covering the truth)."""
+    """Every how many samples a diagnosis fits an oscillating record ``values(times)``:
+    the smallest k for which a change of ``step`` in ln value of a parameter its period
+    scales with moves the end of a cycle by at most k sample spacings (1 for a record
+    that does not oscillate).  Each cycle ends at an edge a sample or two wide: sampled
+    finer, the cost is rugged at the scale of the fit's difference step, and LM stops
+    between its kinks (the 240 mL oscillator at 50 Hz, 8.8 s cycles, with a hidden 3 mL
+    dead volume: every fit of the dead volume stopped 2.5–4.9× the noise floor, and a
+    wrong pair was accepted; on every 3rd sample (k = 3), and on every 2nd, the dead
+    volume alone reaches the floor, every interval covering the truth)."""
     times = np.asarray(times, float)
     aligned = Alignment.of(times, values, "")
     if aligned is None or len(times) < 2:

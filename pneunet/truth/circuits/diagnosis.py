@@ -32,13 +32,13 @@ from ..core.noise import ROUNDING_SIGMA, difference_sigma, resolution, segments
 from ..core.verdict import (TOLERANCE, Step, at_floor, decide, needs_candidates,
                             untested_note)
 from ..core.waterfall import Waterfall
+from .align import thinning
 from .candidate_fits import (CandidateFits, at_bound, base_refit, fit_limits, fit_pairs,
                              fit_screened, ranked, refine_final, second_effects,
                              screen_data, single_refit_from_pair, unfitted_row)
 from .data import read_trace, signal_of_column, signal_unit, split_by_cycles
 from .effects import candidates_for
 from .fit import TraceFit, fit_trace
-from .align import thinning
 from .model import DIFF_STEP, FIT_OPTIONS, TraceModel
 from .screen import screen_candidates
 
@@ -378,8 +378,8 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
 
 
 def thinned_note(df, thin: int, node: str) -> str:
-    """The diagnosis's note on a record whose candidates were fitted on every
-    ``thin``-th sample (:func:`~pneunet.truth.circuits.align.thinning`)."""
+    """The diagnosis's note on a record ``df`` fitted on one sample in ``thin``
+    (:func:`~pneunet.truth.circuits.align.thinning`)."""
     t = df["time_s"].to_numpy(float)
     rate = 1.0 / float(np.median(np.diff(t)))
     return (f"fitted on one sample in {thin} ({rate / thin:.3g} of {rate:.3g} Hz): at the "
