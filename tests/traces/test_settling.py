@@ -70,3 +70,28 @@ def test_an_oscillator_s_effect_fit_waits_a_cycle_a_driven_circuit_s_does_not():
     t = rec["time_s"].to_numpy()
     starts = rising_crossings(t - t[0], rec["p_out1_kPa"].to_numpy())  # from the first sample
     assert fit.start_state.driven and fit.extras["compared_from_s"] == starts[0]
+
+
+def test_a_fit_window_that_ends_before_its_states_settle_is_a_clear_error():
+    """A mid-run record whose fit window ends before the tube's guessed inner pressure
+    has settled (two cycle starts) compares no sample: a DataError naming the settling
+    time, not scipy's "func input vector length" TypeError (a 400 mL oscillator at
+    50 Hz, 17 s cycles, crashed its diagnosis so)."""
+    import pytest
+
+    from pneunet.common.errors import DataError
+    from pneunet.truth.circuits import fit_trace
+
+    from .standalone import oscillator_record
+
+    rec = oscillator_record(30.0, dt=0.05, noise=0.3, seed=2, V=200.0, Rvent=3.5)
+    rec = rec[rec["time_s"] >= 8.0 - 1e-9].reset_index(drop=True)
+    rec["time_s"] -= rec["time_s"].iloc[0]
+    second = settling_time(StartState(mode="record"), rec["time_s"].to_numpy(),
+                           rec["p_tank_kPa"].to_numpy(), 2)
+    tube = Tube("X1", "ctrl")
+    build = NetlistBuilder("netlists/oscillator.pn")
+    params = {"Rvent": (3.8, 0.5, 20.0), **tube.params}
+    with pytest.raises(DataError, match=r"0 samples compared .* settle until"):
+        fit_trace(build, rec, params, node="tank", effects=(tube,),
+                  window=(0.0, second - 0.2), x_start={"Rvent": 3.5}, start_state="record")

@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from ...common.errors import SolverError
+from ...common.errors import DataError, SolverError
 from ..core.verdict import Step, at_floor, indistinguishable
 from .clock import CLOCK_NUDGES, clock_moved, clock_unit
 from .data import compared_samples, signal_of_column
@@ -119,7 +119,7 @@ class CandidateFits:
         name = "none" if eff is None else eff.name
         try:
             fit = self._fit(() if eff is None else (eff,), x_start, max_nfev, state=state)
-        except SolverError as err:
+        except (SolverError, DataError) as err:
             self.failed.setdefault(name, f"fit failed: {err}")
             return None
         self.starts.setdefault(name, []).append(
@@ -135,7 +135,7 @@ class CandidateFits:
         fit's start state); None (and why in ``notes``) when it fails."""
         try:
             return self._fit(effects, x_start, max_nfev, state=state)
-        except SolverError as err:
+        except (SolverError, DataError) as err:
             notes.append(f"{' + '.join(e.name for e in effects)}: fit failed: {err}")
             return None
 

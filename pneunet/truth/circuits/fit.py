@@ -303,6 +303,13 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
     clock_step = clock_unit(state, times)
     fun = TraceResidual(model, names, t_fit, sigs, {s: meas[s][mask] for s in sigs},
                         {s: keep_all[s][mask] for s in sigs}, scales, aligned, clock_step)
+    if fun.size() <= len(names) + bool(clock_step):
+        raise DataError(
+            f"{fun.size()} samples compared in the fit window for "
+            f"{len(names) + bool(clock_step)} parameters"
+            + (f" (the states the record cannot give settle until {settle_until:.4g} s)"
+               if settle_until > 0 else ""), where=where,
+            hint="fit a longer window (--train-fraction) or record longer")
     stage1 = None
     if x_start is not None:
         x0 = np.clip(np.log([x_start.get(k, params[k][0]) for k in names]), lb, ub)
