@@ -6,12 +6,17 @@ guessed, so its fit leaves one whole cycle to settle (``unset_storage``); a reco
 node given a volume (a dead volume at ``out``) is not a guess.
 """
 import numpy as np
+import pytest
 
+from pneunet.common.errors import DataError
 from pneunet.netlist.builder import NetlistBuilder
+from pneunet.truth.circuits import fit_trace
 from pneunet.truth.circuits.effects import DeadVolume, Tube, VolumeHeatTransfer
 from pneunet.truth.circuits.fit import settling_time, unset_storage
 from pneunet.truth.circuits.initial_state import StartState
 from pneunet.truth.circuits.model import TraceModel
+
+from .standalone import oscillator_record
 
 VALUES = {"Rout": 1.132, "Rvent": 3.0}
 RECORDED = {"p_tank_kPa": None, "p_out_kPa": None}
@@ -77,13 +82,6 @@ def test_a_fit_window_that_ends_before_its_states_settle_is_a_clear_error():
     has settled (two cycle starts) compares no sample: a DataError naming the settling
     time, not scipy's "func input vector length" TypeError (a 400 mL oscillator at
     50 Hz, 17 s cycles, crashed its diagnosis so)."""
-    import pytest
-
-    from pneunet.common.errors import DataError
-    from pneunet.truth.circuits import fit_trace
-
-    from .standalone import oscillator_record
-
     rec = oscillator_record(30.0, dt=0.05, noise=0.3, seed=2, V=200.0, Rvent=3.5)
     rec = rec[rec["time_s"] >= 8.0 - 1e-9].reset_index(drop=True)
     rec["time_s"] -= rec["time_s"].iloc[0]

@@ -236,12 +236,13 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
     options = FIT_OPTIONS if options is None else options
     driven = _sources_vary(build, fixed, params, options, df)
     train, test = split_by_cycles(df, node, train_fraction, where=where, driven=driven)
-    thin = 1
+    thin, thin_notes = 1, []
     if not driven and f"p_{node}_kPa" in df:
         thin = thinning(df["time_s"].to_numpy(float), df[f"p_{node}_kPa"].to_numpy(float),
                         DIFF_STEP)
-        if thin > 1:  # every fit on every thin-th sample
-            attrs, thinned_from = dict(df.attrs), df
+        if thin > 1:  # every fit on one sample in thin
+            thin_notes.append(thinned_note(df, thin, node))
+            attrs = dict(df.attrs)
             df = df.iloc[::thin].reset_index(drop=True)
             df.attrs = attrs
     timing = {}
@@ -265,9 +266,7 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
         base_err = base.error(test)
         steps = [Step("base model", base_err, train=base.error(train))]
         ranking = [_row("none", base, test, floor)]
-        notes = [f"base fit: {base.extras['intervals']['note']}"]
-        if thin > 1:
-            notes.append(thinned_note(thinned_from, thin, node))
+        notes = [f"base fit: {base.extras['intervals']['note']}", *thin_notes]
         if train == test:
             notes.append("nothing is held out: a record of a circuit driven by its sources "
                          "with fewer than two cycles at the node is fitted whole, and its "

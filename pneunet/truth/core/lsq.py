@@ -318,8 +318,9 @@ def secant_checked(fun, res, jac, spread, lb, ub, pool=None):
     direction v along which ``jac``·v is within :data:`SECANT_RATIO` of the
     differences' noise (``spread``·v, :func:`~pneunet.truth.core.intervals.
     noise_directions`), weakest first, measured again by a secant of the residual over
-    :data:`SECANT_STEPS` until one changes χ² by :data:`SECANT_CHI2` (resolved).  Its J·v becomes the secant's
-    and its spread 0; so it does where no step resolves it but J·v is above the noise
+    :data:`SECANT_STEPS` until one changes χ² by :data:`SECANT_CHI2` (resolved).  Its
+    J·v becomes the secant's and its spread 0; so it does where no step resolves it but
+    J·v is above the noise
     (the secant over 0.1 carries 20× less of the simulation's error than a 0.005
     difference); where J·v is within the noise and no step resolves it, the direction
     stays noise (undetermined).
