@@ -44,3 +44,24 @@ def test_a_record_sampled_finer_than_a_difference_step_resolves_is_thinned(dt):
     noisy = y + 0.3 * np.random.default_rng(4).standard_normal(t.size)
     assert thinning(t, noisy, 0.005) == math.ceil(0.005 * period / dt)
     assert thinning(t, 200.0 - 100.0 * np.exp(-t / 3.0), 0.005) == 1  # no oscillation
+
+
+def test_a_plain_fit_of_a_finely_sampled_oscillation_is_thinned_too():
+    """`fit-trace` without `--candidates` fits what a diagnosis would: one sample in k
+    (here 50 Hz, 8.8 s cycles: k = 3), says so, and its intervals cover the truth."""
+    from pneunet.netlist.builder import NetlistBuilder
+    from pneunet.truth.circuits import fit_trace
+
+    rec = oscillator_record(36.0, dt=0.02, noise=0.3, seed=5, V=240.0, Rvent=3.5)
+    k = thinning(rec["time_s"].to_numpy(), rec["p_tank_kPa"].to_numpy(), 0.005)
+    assert k == 3
+    fit = fit_trace(NetlistBuilder("netlists/oscillator.pn"), rec,
+                    {"Rout": (1.4, 0.3, 5.0), "Rvent": (3.8, 0.5, 20.0),
+                     "Vtank.V": (250.0, 50.0, 600.0)}, node="tank")
+    assert fit.extras["fitted_every_nth_sample"] == k
+    np.testing.assert_allclose(np.diff(fit.residuals["time_s"]), k * 0.02, rtol=1e-9)
+    assert fit.report().startswith(f"fitted on one sample in {k}")
+    assert "one sample in 3 (16.7 of 50 Hz)" in fit.extras["intervals"]["note"]
+    for name, true in (("Rout", 1.132), ("Rvent", 3.5), ("Vtank.V", 240.0)):
+        lo, hi = fit.ci[name]
+        assert lo <= true <= hi, (name, fit.values[name], fit.ci[name])

@@ -177,3 +177,25 @@ def thinning(times, values, step: float) -> int:
     spacing = float(np.median(np.diff(times)))
     period = float(np.median(np.diff(aligned.starts)))
     return max(1, math.ceil(step * period / spacing - 1e-9))
+
+
+def thinned(df, node: str, step: float):
+    """(``df`` on one sample in k, k, the note saying why or None) for a recording
+    ``df`` (time_s, p_<node>_kPa, ...) of a circuit that oscillates on its own
+    (:func:`thinning`; ``step``: the fits' difference step in ln value)."""
+    column = f"p_{node}_kPa"
+    if column not in df:
+        return df, 1, None
+    t = df["time_s"].to_numpy(float)
+    k = thinning(t, df[column].to_numpy(float), step)
+    if k == 1:
+        return df, 1, None
+    rate = 1.0 / float(np.median(np.diff(t)))
+    note = (f"fitted on one sample in {k} ({rate / k:.3g} of {rate:.3g} Hz): at the full "
+            f"rate a difference step of {step:g} in ln value moves the end of a cycle at "
+            f"{node} by more than a sample, and the fits stop between the kinks that edges "
+            "a sample wide put in the cost (so does the final fit, and its intervals miss: "
+            "the values and intervals reported are those of the samples fitted)")
+    out = df.iloc[::k].reset_index(drop=True)
+    out.attrs = dict(df.attrs)
+    return out, k, note

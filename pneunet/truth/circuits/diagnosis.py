@@ -32,7 +32,7 @@ from ..core.noise import ROUNDING_SIGMA, difference_sigma, resolution, segments
 from ..core.verdict import (TOLERANCE, Step, at_floor, decide, needs_candidates,
                             untested_note)
 from ..core.waterfall import Waterfall
-from .align import thinning
+from .align import thinned
 from .candidate_fits import (CandidateFits, at_bound, base_refit, fit_limits, fit_pairs,
                              fit_screened, ranked, refine_final, second_effects,
                              screen_data, single_refit_from_pair, unfitted_row)
@@ -237,14 +237,9 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
     driven = _sources_vary(build, fixed, params, options, df)
     train, test = split_by_cycles(df, node, train_fraction, where=where, driven=driven)
     thin, thin_notes = 1, []
-    if not driven and f"p_{node}_kPa" in df:
-        thin = thinning(df["time_s"].to_numpy(float), df[f"p_{node}_kPa"].to_numpy(float),
-                        DIFF_STEP)
-        if thin > 1:  # every fit on one sample in thin
-            thin_notes.append(thinned_note(df, thin, node))
-            attrs = dict(df.attrs)
-            df = df.iloc[::thin].reset_index(drop=True)
-            df.attrs = attrs
+    if not driven:  # every fit on one sample in thin
+        df, thin, note = thinned(df, node, DIFF_STEP)
+        thin_notes = [note] if note else []
     timing = {}
     pool = process_pool(workers)
     try:
@@ -253,7 +248,7 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
         base = fit_trace(build, df, params, fixed=fixed, node=node, window=train,
                          max_nfev=BASE_BUDGET * max_nfev, pool=pool, options=options,
                          where=where, start_state=start_state, time_offset=time_offset,
-                         refined=False)
+                         refined=False, thin=1)
         state = base.start_state
         say(f"start: {state.describe()}")
         params = {**params, **{k: v for k, v in state.fitted.items() if k not in params}}
@@ -374,19 +369,6 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
     return TraceDiagnosis(verdict, accepted, floor, unit, ranking, fits, wf, where_txt,
                           {k: v for k, v in noise.items()}, train, test, timing, notes,
                           signal_table(base, final, test, noise, tolerance), thin)
-
-
-def thinned_note(df, thin: int, node: str) -> str:
-    """The diagnosis's note on a record ``df`` fitted on one sample in ``thin``
-    (:func:`~pneunet.truth.circuits.align.thinning`)."""
-    t = df["time_s"].to_numpy(float)
-    rate = 1.0 / float(np.median(np.diff(t)))
-    return (f"fitted on one sample in {thin} ({rate / thin:.3g} of {rate:.3g} Hz): at the "
-            f"full rate a difference step of {DIFF_STEP:g} in ln "
-            f"value moves the end of a cycle at {node} by more than a sample, and the fits "
-            "stop between the kinks that edges a sample wide put in the cost (so does the "
-            "final fit, and its intervals miss: the values and intervals reported are those "
-            "of the samples fitted)")
 
 
 def _sources_vary(build, fixed, params, options, df) -> bool:

@@ -25,7 +25,7 @@ from ..core.intervals import intervals
 from ..core.lsq import (jacobian_spread, least_squares_log, refine, secant_checked,
                         secant_note)
 from ..core.noise import record_sigma, segments
-from .align import Alignment
+from .align import Alignment, thinned
 from .clock import CLOCK, clock_fitted, clock_unit, fit_clock
 from .data import compared_samples, read_trace, signal_of_column, signal_unit, swings
 from .initial_state import P0_PREFIX, StartState, choose_start
@@ -138,6 +138,9 @@ class TraceFit(Summarized):
 
     def report(self) -> str:
         lines = ["parameter        estimate      95 % CI"]
+        every = self.extras.get("fitted_every_nth_sample", 1)
+        if every > 1:
+            lines.insert(0, f"fitted on one sample in {every} (see the intervals' note)")
         for k, v in self.values.items():
             lo, hi = self.ci[k]
             lines.append(f"  {k:<14} {v:>10.5g}   [{lo:.5g}, {hi:.5g}]")
@@ -203,7 +206,7 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
               pool=None, x_start: dict | None = None, where: str | None = None,
               align: bool = True, start_state="auto",
               time_offset: float | None = None, refined: bool = True,
-              clock_starts: bool | None = None) -> TraceFit:
+              clock_starts: bool | None = None, thin: int | None = None) -> TraceFit:
     """Estimate ``params`` ({name: (guess, low, high)}) so the circuit reproduces ``data``.
 
     ``build(point) -> Circuit`` (or a :class:`~pneunet.netlist.builder.NetlistBuilder`)
@@ -225,7 +228,10 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
     file's first time stamp for a driven circuit, else 0; where the record shows the
     file's clock misplaces periodic sources, the phase it shows, then fitted with the
     parameters: :func:`~pneunet.truth.circuits.clock.fit_clock`, from several starts
-    unless ``clock_starts`` is False (default: unless ``start_state`` is a StartState)).
+    unless ``clock_starts`` is False (default: unless ``start_state`` is a StartState));
+    ``thin``: fit one sample in ``thin`` (default: for a circuit that oscillates on its
+    own, as many as :func:`~pneunet.truth.circuits.align.thinning` says, with a note in
+    the intervals' note; 1 for every sample).
     A driven record whose first samples are off rest, after its sources began to
     change, is fitted from them and from the netlist's rest state driven by its sources
     up to the first sample (:func:`better_start`).
@@ -245,13 +251,7 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
     where = where or df.attrs["source"]
     cols = [c for c in df.columns if c != "time_s"]
     sigs = [signal_of_column(c) for c in cols]
-    times = df["time_s"].to_numpy()
-    meas = {s: df[c].to_numpy() for s, c in zip(sigs, cols)}
-    mask = np.ones(len(times), bool)
-    if window is not None:
-        mask = (times >= window[0]) & (times <= window[1])
-    if mask.sum() < 5:
-        raise DataError("fewer than 5 samples in the fit window", where=where)
+    times, meas, mask = _samples(df, sigs, cols, window, where)
     for k in params:
         g, lo, hi = params[k]
         if not 0 < lo <= g <= hi:
@@ -280,6 +280,10 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
             return better_start(rest, fit_trace(build, df, params, start_state=state,
                                                 **again))
     node = node or next((s[2:] for s in sigs if s.startswith("p_")), None)
+    thin_note = None
+    if thin is None and not state.driven and node:
+        df, thin, thin_note = thinned(df, node, diff_step)
+        times, meas, mask = _samples(df, sigs, cols, window, where)
     settle_until = settling_time(state, times, meas.get(f"p_{node}"),
                                  2 if not state.driven and unset_storage(model, guess, meas)
                                  else 1)
@@ -347,6 +351,9 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
     ci, se, info = intervals(res.x, res.jac, res.fun, names + [CLOCK] * bool(clock_step),
                              groups=groups, confidence=confidence, spread=spread)
     named = names + [CLOCK] * bool(clock_step)
+    if thin_note:
+        info["thinned_note"] = thin_note
+        info["note"] += "; " + thin_note
     if measured:
         info["secant_note"] = secant_note(measured, named, diff_step)
         info["note"] += "; " + info["secant_note"]
@@ -397,7 +404,21 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
                      "model": model, "recording": where,
                      "compared": {s: int(keep_all[s].sum()) for s in sigs},
                      "keep": keep_all,
-                     "compared_from_s": settle_until}, on_budget=res.on_budget)
+                     "compared_from_s": settle_until, "fitted_every_nth_sample": thin or 1},
+                    on_budget=res.on_budget)
+
+
+def _samples(df, sigs, cols, window, where):
+    """(times, {signal: values}, mask of the fit ``window``) of a recording ``df``; a
+    DataError with fewer than 5 samples in the window."""
+    times = df["time_s"].to_numpy()
+    meas = {s: df[c].to_numpy() for s, c in zip(sigs, cols)}
+    mask = np.ones(len(times), bool)
+    if window is not None:
+        mask = (times >= window[0]) & (times <= window[1])
+    if mask.sum() < 5:
+        raise DataError("fewer than 5 samples in the fit window", where=where)
+    return times, meas, mask
 
 
 #: a start from the record's first samples is kept over the netlist's rest state driven
