@@ -36,6 +36,9 @@ class Fitting:
         kind = {"screen point": "first", "second start": "second"}.get(kind, kind)
         assert kind != "continued" or x_start.get("from") == eff.name == state.of
         self.calls.append((eff.name, kind))
+        if self.held_out[eff.name] is None:  # its fit cannot be made (e.g. nothing compared)
+            self.failed[eff.name] = "fit failed"
+            return None
         err = x_start.get("err", self.held_out[eff.name]) * (1.0 if kind == "first" else 0.5)
         stopped = eff.name in self.stopped
         return SimpleNamespace(error=lambda window=None: err, effects=(eff,),
@@ -65,6 +68,19 @@ def test_the_next_inseparable_candidates_are_fitted_until_one_reaches_the_floor(
     fit_screened(screened, fits, fitting, 3, 160, lambda m: None)
     assert fitting.calls == [("e0", "first"), ("e1", "first"), ("e2", "first"),
                              ("e3", "first")]  # e3 reaches the floor: no more, no seconds
+
+
+def test_a_candidate_that_cannot_be_fitted_gives_its_place_to_the_next_in_the_screen():
+    """Two tubes whose states settle only after the fit window ranked first: they fail,
+    and the next two in the screen's order are fitted instead, however much worse their
+    merits (the 400 mL oscillator's hidden dead volume was screened out behind them)."""
+    screened = rows(1.0, 1.05, 2 * SCREEN_KEEP, 3 * SCREEN_KEEP, 4 * SCREEN_KEEP)
+    fitting = Fitting({"e0": None, "e1": None, "e2": 9, "e3": 0.9, "e4": 0.5})
+    fits = {}
+    fit_screened(screened, fits, fitting, 2, 160, lambda m: None)
+    assert fitting.calls == [("e0", "first"), ("e1", "first"), ("e2", "first"),
+                             ("e3", "first")]
+    assert set(fits) == {"e2", "e3"} and set(fitting.failed) == {"e0", "e1"}
 
 
 def test_one_the_screen_shows_clearly_worse_is_never_fitted():
