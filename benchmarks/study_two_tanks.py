@@ -13,6 +13,11 @@ fitted with V2 given, so no volume can take it up).
 
     python benchmarks/study_two_tanks.py                  # 3 starts per case
     python benchmarks/study_two_tanks.py --runs 6 --seed 5 --rate 20
+    python benchmarks/study_two_tanks.py --pulse          # a square-wave supply instead
+
+``--pulse``: the supply a square wave (96 kPa until 1 s, then 296 kPa for 3 s in every
+6 s; netlists/two_tanks_pulse.pn), the logger started at a random time 4-30 s after
+switch-on, 36 s recorded: a periodic driven circuit whose clock the diagnosis must find.
 """
 from __future__ import annotations
 
@@ -38,17 +43,21 @@ def main(argv=None) -> None:
     ap.add_argument("--runs", type=int, default=3, help="logger starts per case")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--rate", type=float, default=50.0, help="samples per second")
+    ap.add_argument("--pulse", action="store_true", help="a square-wave supply")
     args = ap.parse_args(argv)
 
     from pneunet.netlist.builder import NetlistBuilder
     from pneunet.truth.circuits import diagnose_trace
-    from tests.traces.standalone_tanks import TRUTH, tanks_record
+    from tests.traces.standalone_tanks import TRUTH, square_supply, supply, tanks_record
 
-    build = NetlistBuilder(str(ROOT / "netlists" / "two_tanks.pn"))
+    netlist, source = ("two_tanks_pulse.pn", square_supply) if args.pulse \
+        else ("two_tanks.pn", supply)
+    starts, seconds = ((4.0, 30.0), 36.0) if args.pulse else ((0.3, 3.5), 18.0)
+    build = NetlistBuilder(str(ROOT / "netlists" / netlist))
     params = {"R1": (0.7, 0.05, 5.0), "R2": (1.5, 0.1, 20.0)}
     fixed = {"V1": TRUTH["V1"], "V2": TRUTH["V2"]}
     rng = np.random.default_rng(args.seed)
-    print(f"{args.rate:g} Hz, 18 s, clock from 0; V1 {fixed['V1']:g} mL and V2 "
+    print(f"{netlist}: {args.rate:g} Hz, {seconds:g} s, clock from 0; V1 {fixed['V1']:g} mL and V2 "
           f"{fixed['V2']:g} mL given, R1 (0.5) and R2 (2) fitted\n")
     print("| hidden | start s | noise kPa | verdict (want) | accepted | base → final × floor "
           "| R1 [95 %] | R2 [95 %] | s |")
@@ -56,9 +65,9 @@ def main(argv=None) -> None:
     right = total = covered = intervals = 0
     for name, (hidden, want) in CASES.items():
         for _ in range(args.runs):
-            start, noise = float(rng.uniform(0.3, 3.5)), float(rng.uniform(0.2, 0.5))
-            rec = tanks_record(start=start, dt=1.0 / args.rate, noise=noise,
-                               seed=int(rng.integers(1 << 30)), **hidden)
+            start, noise = float(rng.uniform(*starts)), float(rng.uniform(0.2, 0.5))
+            rec = tanks_record(start=start, seconds=seconds, dt=1.0 / args.rate, noise=noise,
+                               seed=int(rng.integers(1 << 30)), source=source, **hidden)
             t0 = time.perf_counter()
             d = diagnose_trace(build, rec, params, fixed=fixed, node="t2")
             wall = time.perf_counter() - t0

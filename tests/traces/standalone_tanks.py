@@ -1,5 +1,6 @@
 """Stand-alone recordings of two tanks charged and vented through quadrature lines by a
-supply step (96 → 296 kPa at 2 s, back at 12 s): ``netlists/two_tanks.pn``.
+supply step (96 → 296 kPa at 2 s, back at 12 s): ``netlists/two_tanks.pn``; or by a
+square wave (:func:`square_supply`): ``netlists/two_tanks_pulse.pn``.
 
 Nothing here imports pneunet: the quadrature law (eq. 4, 1 kPa² band), isothermal
 tanks, and the hidden effects are coded below and integrated by scipy's Radau.
@@ -32,9 +33,18 @@ def supply(t):
     return float(np.interp(t, [0, 2, 2.02, 12, 12.02], [96, 96, 296, 296, 96]))
 
 
+def square_supply(t):
+    """96 kPa until 1 s, then 296 kPa for 3 s (20 ms ramps included) in every 6 s."""
+    if t < 1.0:
+        return 96.0
+    u = (t - 1.0) % 6.0
+    return float(np.interp(u, [0.0, 0.02, 3.0, 3.02, 6.0], [96, 296, 296, 96, 96]))
+
+
 def tanks_record(start=1.1, seconds=18.0, dt=0.02, noise=0.3, seed=0, heat_tau=None,
-                 leak=None, side=None, **values):
-    """p_t1, p_t2 from ``start`` s on the supply's clock, the logger's clock from 0.
+                 leak=None, side=None, source=supply, **values):
+    """p_t1, p_t2 from ``start`` s on the supply's clock (``source``: its pressure, kPa,
+    at t s), the logger's clock from 0.
 
     Hidden effects: ``heat_tau`` (s) energy balance in tank 1 with hA = C(V1)·200/τ;
     ``leak`` (kPa·s/mg) a laminar leak of tank 2 to 96 kPa; ``side`` (R, V mL) a
@@ -46,7 +56,7 @@ def tanks_record(start=1.1, seconds=18.0, dt=0.02, noise=0.3, seed=0, heat_tau=N
     def rhs(t, y):
         # y: tank 1 (pressure, or gas mass with heat), T1, p2, p_side
         p1 = y[0] / capacitance(v["V1"], y[1]) if heat_tau else y[0]
-        q1, q2 = line(supply(t), p1, v["R1"]), line(p1, y[2], v["R2"])
+        q1, q2 = line(source(t), p1, v["R1"]), line(p1, y[2], v["R2"])
         into2 = q2 - ((y[2] - 96.0) / leak if leak else 0.0)
         dy = np.zeros(4)
         if side:
