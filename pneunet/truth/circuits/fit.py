@@ -28,6 +28,7 @@ from ..core.noise import record_sigma, segments
 from .align import Alignment, thinned
 from .clock import CLOCK, clock_fitted, clock_unit, fit_clock
 from .data import compared_samples, read_trace, signal_of_column, signal_unit, swings
+from .driven_start import better_start, clock_at_fit
 from .initial_state import P0_PREFIX, StartState, choose_start
 from .model import (DIFF_STEP, FIT_OPTIONS, REFINE_DIFF_STEP, REFINE_OPTIONS, TraceModel,
                     TraceResidual, sample_at)
@@ -274,6 +275,9 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
                 rest = fit_trace(build, df, params, start_state=replace(rest, reason=(
                     "the netlist's rest state driven by its sources to the first sample")),
                     **again)
+                if time_offset is None:
+                    rest = clock_at_fit(rest, model, df, where, lambda st, x: fit_trace(
+                        build, df, params, start_state=st, **{**again, "x_start": x}))
         except PneunetError:
             rest = None
         if isinstance(rest, TraceFit):
@@ -419,32 +423,6 @@ def _samples(df, sigs, cols, window, where):
     if mask.sum() < 5:
         raise DataError("fewer than 5 samples in the fit window", where=where)
     return times, meas, mask
-
-
-#: a start from the record's first samples is kept over the netlist's rest state driven
-#: up to them only where its rms is below this fraction of the other's
-RECORD_START_GAIN = 0.9
-
-
-def better_start(rest: TraceFit, record: TraceFit) -> TraceFit:
-    """Of one record's fits from the netlist's rest state driven by its sources up to the
-    first sample and from the first samples, the first unless the second's rms, on the
-    samples both compare, is below :data:`RECORD_START_GAIN` × its: the history carries
-    what the first samples do not show (a gas temperature, a dead volume's pressure),
-    and every effect fitted later starts from the same state.  A tanks' record from 0.7 s
-    into a charge, with heat exchange hidden: from the record 0.733 kPa, from rest 0.743;
-    from the record no effect reached the floor (its gas starting at wall temperature),
-    from rest heat exchange did.  The start's reason says so; the simulations of both
-    count."""
-    both = np.isfinite(rest.scaled_residuals()) & np.isfinite(record.scaled_residuals())
-    rms = [_rms(f.scaled_residuals()[both]) for f in (rest, record)]
-    best = record if rms[1] < RECORD_START_GAIN * rms[0] else rest
-    state = replace(best.start_state, reason=(
-        f"{best.start_state.reason}; fitted from both starts, rms on the samples both "
-        f"compare: from rest {rms[0]:.4g}, from the record {rms[1]:.4g} {best.unit}"))
-    total = rest.nfev + record.nfev
-    return replace(best, nfev=total, extras={**best.extras, "start_state": state,
-                                              "simulations": total})
 
 
 def refine_fit(res, fun: TraceResidual, lb, ub, max_nfev: int, pool):
