@@ -201,9 +201,10 @@ def test_a_settled_periodic_history_is_found_where_the_guesses_cannot_tell_it():
     """Two tanks driven by a square wave (6 s), the logger started 15.0 s after switch-on
     on its own clock, clean but for 0.45 kPa of noise; R1 and R2 guessed 40 % and 25 %
     off.  At the guesses the supply's first period after switch-on and a settled one
-    misfit the record alike, and the first was taken: fitted from it, the tanks started
-    0.14 kPa below their settled state and R2's interval missed the truth (1.988
-    [1.980, 1.996]), the diagnosis called the clean record ``unexplained``.  At the
+    misfit the record alike, and the first was taken (there, at the true values, t2 is
+    8 kPa below its settled value at the first sample: 263.2 against 271.1 kPa); fitted
+    from it, R2's interval missed the truth (1.988 [1.980, 1.996]) and the diagnosis
+    called the clean record ``unexplained``.  At the
     fitted values the record shows a settled period; fitted again from there, both
     intervals cover."""
     from .standalone_tanks import TRUTH, square_supply, tanks_record
