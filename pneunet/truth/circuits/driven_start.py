@@ -13,6 +13,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from ...common.errors import PneunetError
 from .initial_state import P0_PREFIX, choose_start
 
 
@@ -55,18 +56,22 @@ def clock_at_fit(fit, model, df, where: str, refit):
     ``refit(state, values)`` from the rest state there, whichever fits the samples both
     compare better.  Two tanks driven by a square wave, recorded from 15 s: at the
     guesses (R 40 % and 25 % off) the first period and a settled one misfit alike and
-    the first was taken; fitted from it, 2.2× the floor, and the clean record was called
-    ``unexplained``."""
+    the first was taken; fitted from it, 2.2× the floor on the fitted window, and the
+    clean record was called ``unexplained``."""
     old = fit.start_state
     if not old.clock_period:
         return fit
-    state = choose_start(model, {k: v for k, v in fit.values.items()
-                                 if not k.startswith(P0_PREFIX)}, df, "rest", None, where)
-    if state.settle <= 0 or abs(state.first_time - old.first_time) < 0.5 * old.clock_period:
+    try:  # a start that cannot be found or fitted there leaves ``fit`` as it is
+        state = choose_start(model, {k: v for k, v in fit.values.items()
+                                     if not k.startswith(P0_PREFIX)}, df, "rest", None, where)
+        if state.settle <= 0 or \
+                abs(state.first_time - old.first_time) < 0.5 * old.clock_period:
+            return fit
+        other = refit(replace(state, reason=(
+            "the netlist's rest state driven by its sources to the first sample, at the "
+            "netlist time the record shows at the fitted values")), dict(fit.values))
+    except PneunetError:
         return fit
-    other = refit(replace(state, reason=(
-        "the netlist's rest state driven by its sources to the first sample, at the netlist "
-        "time the record shows at the fitted values")), dict(fit.values))
     rms_fit, rms_other = _rms_on_common(fit, other)
     better = other if rms_other < rms_fit else fit
     total = fit.nfev + other.nfev
