@@ -47,7 +47,7 @@ def test_a_record_sampled_finer_than_a_difference_step_resolves_is_thinned(dt):
 
 
 def test_a_plain_fit_of_a_finely_sampled_oscillation_can_be_thinned_too():
-    """``fit_trace(thin=None)`` fits what a diagnosis would: one sample in k (here 50 Hz,
+    """``fit_trace(thin=True)`` fits what a diagnosis would: one sample in k (here 50 Hz,
     8.8 s cycles: k = 3), says so, and its intervals cover the truth."""
     from pneunet.netlist.builder import NetlistBuilder
     from pneunet.truth.circuits import fit_trace
@@ -57,7 +57,7 @@ def test_a_plain_fit_of_a_finely_sampled_oscillation_can_be_thinned_too():
     assert k == 3
     fit = fit_trace(NetlistBuilder("netlists/oscillator.pn"), rec,
                     {"Rout": (1.4, 0.3, 5.0), "Rvent": (3.8, 0.5, 20.0),
-                     "Vtank.V": (250.0, 50.0, 600.0)}, node="tank", thin=None)
+                     "Vtank.V": (250.0, 50.0, 600.0)}, node="tank", thin=True)
     assert fit.extras["fitted_every_nth_sample"] == k
     np.testing.assert_allclose(np.diff(fit.residuals["time_s"]), k * 0.02, rtol=1e-9)
     assert fit.report().startswith(f"fitted on one sample in {k}")

@@ -47,7 +47,7 @@ class CandidateFits:
         return fit_trace(self.build, self.df, p, fixed=self.fixed, node=self.node,
                          window=self.train, effects=effs, max_nfev=max_nfev, pool=self.pool,
                          options=self.options, x_start=x, where=self.where,
-                         start_state=state or self.state, refined=refined, thin=1)
+                         start_state=state or self.state, refined=refined)
 
     def refined(self, fit: TraceFit, max_nfev: int) -> TraceFit:
         """``fit`` fitted again from its values and refined

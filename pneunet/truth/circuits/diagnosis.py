@@ -248,7 +248,7 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
         base = fit_trace(build, df, params, fixed=fixed, node=node, window=train,
                          max_nfev=BASE_BUDGET * max_nfev, pool=pool, options=options,
                          where=where, start_state=start_state, time_offset=time_offset,
-                         refined=False, thin=1)
+                         refined=False)
         state = base.start_state
         say(f"start: {state.describe()}")
         params = {**params, **{k: v for k, v in state.fitted.items() if k not in params}}

@@ -207,7 +207,7 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
               pool=None, x_start: dict | None = None, where: str | None = None,
               align: bool = True, start_state="auto",
               time_offset: float | None = None, refined: bool = True,
-              clock_starts: bool | None = None, thin: int | None = 1) -> TraceFit:
+              clock_starts: bool | None = None, thin: bool = False) -> TraceFit:
     """Estimate ``params`` ({name: (guess, low, high)}) so the circuit reproduces ``data``.
 
     ``build(point) -> Circuit`` (or a :class:`~pneunet.netlist.builder.NetlistBuilder`)
@@ -230,11 +230,11 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
     file's clock misplaces periodic sources, the phase it shows, then fitted with the
     parameters: :func:`~pneunet.truth.circuits.clock.fit_clock`, from several starts
     unless ``clock_starts`` is False (default: unless ``start_state`` is a StartState));
-    ``thin``: fit one sample in ``thin`` (default 1: every sample; None: for a circuit
-    that oscillates on its own, as many as :func:`~pneunet.truth.circuits.align.thinning`
-    says, as a diagnosis does, with a note in the intervals' note.  Not the default: the
-    Fig. 12 rig with a slow muscle at 40 Hz, fitted on one sample in 3, ended 0.74 % off
-    its tank volume at rms 0.322 kPa for 0.3 of noise; on every sample 0.41 % at 0.307).
+    ``thin``: for a circuit that oscillates on its own, fit one sample in as many as
+    :func:`~pneunet.truth.circuits.align.thinning` says, as a diagnosis does, with a note
+    in the intervals' note (default: every sample; thinned, the Fig. 12 rig with a slow
+    muscle at 40 Hz, on one sample in 3, ended 0.74 % off its tank volume at rms 0.322
+    kPa for 0.3 of noise, on every sample 0.41 % at 0.307).
     A driven record whose first samples are off rest, after its sources began to
     change, is fitted from them and from the netlist's rest state driven by its sources
     up to the first sample (:func:`~pneunet.truth.circuits.driven_start.better_start`;
@@ -289,8 +289,9 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
                                                 **again))
     node = node or next((s[2:] for s in sigs if s.startswith("p_")), None)
     thin_note = None
-    if thin is None and not state.driven and node:
-        df, thin, thin_note = thinned(df, node, diff_step)
+    every = 1
+    if thin and not state.driven and node:
+        df, every, thin_note = thinned(df, node, diff_step)
         times, meas, mask = _samples(df, sigs, cols, window, where)
     settle_until = settling_time(state, times, meas.get(f"p_{node}"),
                                  2 if not state.driven and unset_storage(model, guess, meas)
@@ -412,7 +413,7 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
                      "model": model, "recording": where,
                      "compared": {s: int(keep_all[s].sum()) for s in sigs},
                      "keep": keep_all,
-                     "compared_from_s": settle_until, "fitted_every_nth_sample": thin or 1},
+                     "compared_from_s": settle_until, "fitted_every_nth_sample": every},
                     on_budget=res.on_budget)
 
 
