@@ -4,6 +4,7 @@ stopped in a wrong valley, and the verdict is then decided on it."""
 from types import SimpleNamespace
 
 from pneunet.truth.circuits.candidate_fits import CandidateFits, base_refit
+from pneunet.truth.core.lsq import Abandoned
 from pneunet.truth.core.verdict import Step, decide
 
 TEST, TRAIN = (10.0, 20.0), (0.0, 10.0)
@@ -25,8 +26,8 @@ class Fitting:
     def __init__(self, refit):
         self.refit, self.started = refit, []
 
-    def start(self, eff, x_start, max_nfev, kind, state=None):
-        self.started.append((eff, dict(x_start), max_nfev, kind, state))
+    def start(self, eff, x_start, max_nfev, kind, state=None, give_up_rms=None):
+        self.started.append((eff, dict(x_start), max_nfev, kind, state, give_up_rms))
         return self.refit
 
 
@@ -47,9 +48,9 @@ def test_a_base_fit_in_a_wrong_valley_is_replaced_and_the_effect_not_needed():
     notes = []
     assert base_refit(fits, steps, fitting, 120, notes, print)
     # started from the best model's base values only (not its effect's) and its start
-    # state (its fitted clock), the base budget
+    # state (its fitted clock), the base budget, of use only below the base's error
     assert fitting.started == [(None, {"Rpull": 23.0, "V": 3.5}, 120, "tube@X1.in's values",
-                                "the tube's fitted clock")]
+                                "the tube's fitted clock", 5.0)]
     assert fits["none"] is fitting.refit and steps[0].held_out == 0.30
     assert decide(steps, 0.3) == ("adequate", [])
     assert "5 → 0.3 kPa" in notes[0]
@@ -69,3 +70,13 @@ def test_nothing_is_refitted_when_no_model_beats_the_base():
     steps[1] = Step("tube@X1.in", 6.0, effects=("tube@X1.in",))
     assert not base_refit(fits, steps, fitting, 120, [], print)
     assert fitting.started == []
+
+
+def test_a_refit_that_cannot_beat_the_base_is_abandoned_with_a_note():
+    fits, steps, fitting = setup(None)
+    fitting.refit = Abandoned(9, 2.3e6)
+    base, notes = fits["none"], []
+    assert not base_refit(fits, steps, fitting, 120, notes, print)
+    assert fits["none"] is base and decide(steps, 0.3) == ("explained", ["tube@X1.in"])
+    assert notes == ["base model fitted again from tube@X1.in's values: abandoned after 9 "
+                     "simulations, at its pace it could not reach the base fit's 5 kPa"]

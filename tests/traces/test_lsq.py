@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy import optimize
 
-from pneunet.truth.core.lsq import FIRST_RADIUS, least_squares_log
+from pneunet.truth.core.lsq import FIRST_RADIUS, Abandoned, least_squares_log
 
 T = np.linspace(0.0, 4.0, 60)
 NOISE = 0.01 * np.random.default_rng(7).standard_normal(T.size)
@@ -180,3 +180,37 @@ def test_lm_stopped_beside_a_cliff_starts_again_away_from_it():
     assert res.fun @ res.fun == pytest.approx(0.0, abs=1e-10)
     assert res.nfev <= 200
     assert res.other_jac is None  # well conditioned at the bottom: no cliff to look for
+
+
+def test_a_fit_that_cannot_reach_its_give_up_cost_is_abandoned_and_one_that_can_is_not():
+    """``give_up`` (the base model fitted again from a candidate's values, of use only
+    below the base fit's error): a fit creeping along far above that cost is abandoned
+    in fewer than half the simulations it would take to converge, with the cost it had
+    reached; from starts a factor 2–20
+    off, where its first steps are long, a fit that can reach the cost is not, and it
+    ends where it would without the rule."""
+    lb, ub = np.log([0.1, 0.01]), np.log([50.0, 10.0])
+
+    class Stuck(Decay):
+        """The decay with a wrong model in a valley of its own: b cannot fall below 1.5,
+        so the cost stays far above the noise whatever LM does."""
+
+        def __call__(self, x):
+            a, b = np.exp(x)
+            return super().__call__(np.log([a, 1.5 + b]))
+
+    best = least_squares_log(Decay(), np.log([1.0, 0.3]), lb, ub, max_nfev=200,
+                             diff_step=1e-4).fun
+    floor = float(best @ best)
+    stuck = least_squares_log(Stuck(), np.log([2.0, 0.5]), lb, ub, max_nfev=120,
+                              diff_step=1e-4)
+    assert float(stuck.fun @ stuck.fun) > 100 * floor and stuck.nfev > 20
+    with pytest.raises(Abandoned) as gave_up:
+        least_squares_log(Stuck(), np.log([2.0, 0.5]), lb, ub, max_nfev=120,
+                          diff_step=1e-4, give_up=1.5 * floor)
+    assert gave_up.value.nfev < stuck.nfev / 2 and gave_up.value.cost > 100 * floor
+    for start in ([1.0, 0.3], [0.2, 5.0], [20.0, 0.02], [10.0, 5.0], [50.0, 0.01]):
+        free = least_squares_log(Decay(), np.log(start), lb, ub, max_nfev=60, diff_step=1e-4)
+        ruled = least_squares_log(Decay(), np.log(start), lb, ub, max_nfev=60,
+                                  diff_step=1e-4, give_up=1.01 * floor)
+        np.testing.assert_array_equal(ruled.x, free.x)

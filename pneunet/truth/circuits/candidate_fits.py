@@ -12,6 +12,7 @@ import math
 import numpy as np
 
 from ...common.errors import DataError, SolverError
+from ..core.lsq import Abandoned
 from ..core.verdict import Step, at_floor, indistinguishable
 from .clock import CLOCK_NUDGES, clock_moved, clock_unit
 from .data import compared_samples, signal_of_column
@@ -35,7 +36,7 @@ class CandidateFits:
         self.screen_setup = None
         self.screen_simulations = 0  # simulations of second starts' and second effects' screens
 
-    def _fit(self, effs, x_start, max_nfev, refined=False, state=None):
+    def _fit(self, effs, x_start, max_nfev, refined=False, state=None, give_up_rms=None):
         p = {k: (float(np.clip(self.base.values[k], lo, hi)), lo, hi)
              for k, (_, lo, hi) in self.params.items()}
         for e in effs:
@@ -47,7 +48,8 @@ class CandidateFits:
         return fit_trace(self.build, self.df, p, fixed=self.fixed, node=self.node,
                          window=self.train, effects=effs, max_nfev=max_nfev, pool=self.pool,
                          options=self.options, x_start=x, where=self.where,
-                         start_state=state or self.state, refined=refined)
+                         start_state=state or self.state, refined=refined,
+                         give_up_rms=give_up_rms)
 
     def refined(self, fit: TraceFit, max_nfev: int) -> TraceFit:
         """``fit`` fitted again from its values and refined
@@ -110,23 +112,33 @@ class CandidateFits:
         one."""
         return at_floor(self.score(fit), self.floor, self.tolerance)
 
-    def start(self, eff, x_start, max_nfev, kind: str, state=None) -> TraceFit | None:
+    def start(self, eff, x_start, max_nfev, kind: str, state=None,
+              give_up_rms=None) -> TraceFit | Abandoned | None:
         """The fit of ``eff`` (None: the base model) from ``x_start`` (its parameters;
         the base ones from the base fit's or the screen's) and ``state`` (the start state
         of the fit ``x_start`` comes from, its fitted clock; default the base fit's);
-        None (and why in ``failed``) when it fails.  Every start is listed in ``starts``,
-        with ``kind`` (where it started: 'screen point', 'second start', 'continued', …)."""
+        None (and why in ``failed``) when it fails; the
+        :class:`~pneunet.truth.core.lsq.Abandoned` where it cannot reach ``give_up_rms``
+        (:func:`~pneunet.truth.circuits.fit.fit_trace`).  Every start is listed in
+        ``starts``, with ``kind`` (where it started: 'screen point', 'second start',
+        'continued', …)."""
         name = "none" if eff is None else eff.name
+        row = {"kind": kind,
+               "start": {k: float(x_start[k]) for k in (eff or self).params if k in x_start}}
         try:
-            fit = self._fit(() if eff is None else (eff,), x_start, max_nfev, state=state)
+            fit = self._fit(() if eff is None else (eff,), x_start, max_nfev, state=state,
+                            give_up_rms=give_up_rms)
         except (SolverError, DataError) as err:
             self.failed.setdefault(name, f"fit failed: {err}")
             return None
+        except Abandoned as gave_up:
+            self.starts.setdefault(name, []).append(
+                dict(row, held_out_rms=None, simulations=gave_up.nfev, converged=False,
+                     abandoned=True))
+            return gave_up
         self.starts.setdefault(name, []).append(
-            {"kind": kind,
-             "start": {k: float(x_start[k]) for k in (eff or self).params if k in x_start},
-             "held_out_rms": fit.error(self.test), "simulations": fit.extras.get("simulations"),
-             "converged": fit.success})
+            dict(row, held_out_rms=fit.error(self.test),
+                 simulations=fit.extras.get("simulations"), converged=fit.success))
         return fit
 
     def pair(self, effects, x_start, max_nfev, notes, state=None) -> TraceFit | None:
@@ -411,14 +423,22 @@ def base_refit(fits, steps, fitting, max_nfev, notes, say) -> bool:
     """Parsimony: the base model again from the best model's values of its parameters
     (a base fit that stopped in a wrong valley, an effect merely escaping it); True when
     that fit is better than the base fit (it replaces it, and the verdict is decided on
-    it: an effect is accepted only where the base model cannot reach the floor)."""
+    it: an effect is accepted only where the base model cannot reach the floor).  The
+    fit is abandoned where, at the pace of its last steps, its budget would not bring its
+    fit window's error below the base model's score (the larger of its two windows'
+    errors), which it has to beat (:func:`~pneunet.truth.core.lsq.least_squares_log`)."""
     if len(steps) < 2 or steps[-1].worst >= steps[0].worst:
         return False
     name = " + ".join(steps[-1].effects)
     best = fits[name]
     say(f"fitting the base model again from {name}'s values")
     again = fitting.start(None, {k: best.values[k] for k in fitting.params}, max_nfev,
-                          f"{name}'s values", best.start_state)
+                          f"{name}'s values", best.start_state, give_up_rms=steps[0].worst)
+    if isinstance(again, Abandoned):  # its fit window's error would not beat the base's
+        notes.append(f"base model fitted again from {name}'s values: abandoned after "
+                     f"{again.nfev} simulations, at its pace it could not reach the base "
+                     f"fit's {steps[0].worst:.4g} {best.unit}")
+        return False
     if again is None or fitting.score(again) >= steps[0].worst:
         return False
     notes.append(f"base model fitted again from {name}'s values: held-out error "

@@ -207,7 +207,8 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
               pool=None, x_start: dict | None = None, where: str | None = None,
               align: bool = True, start_state="auto",
               time_offset: float | None = None, refined: bool = True,
-              clock_starts: bool | None = None, thin: bool = False) -> TraceFit:
+              clock_starts: bool | None = None, thin: bool = False,
+              give_up_rms: float | None = None) -> TraceFit:
     """Estimate ``params`` ({name: (guess, low, high)}) so the circuit reproduces ``data``.
 
     ``build(point) -> Circuit`` (or a :class:`~pneunet.netlist.builder.NetlistBuilder`)
@@ -234,7 +235,10 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
     :func:`~pneunet.truth.circuits.align.thinning` says, as a diagnosis does, with a note
     in the intervals' note (default: every sample; thinned, the Fig. 12 rig with a slow
     muscle at 40 Hz, on one sample in 3, ended 0.74 % off its tank volume at rms 0.322
-    kPa for 0.3 of noise, on every sample 0.41 % at 0.307).
+    kPa for 0.3 of noise, on every sample 0.41 % at 0.307); ``give_up_rms``: an rms
+    (in the fit's unit) the fit is of use only below: an
+    :class:`~pneunet.truth.core.lsq.Abandoned` is raised where, at its pace, its budget
+    would not bring it there (:func:`~pneunet.truth.core.lsq.least_squares_log`).
     A driven record whose first samples are off rest, after its sources began to
     change, is fitted from them and from the netlist's rest state driven by its sources
     up to the first sample (:func:`~pneunet.truth.circuits.driven_start.better_start`;
@@ -343,7 +347,9 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
     # each initial pressure fitted costs a Jacobian column per step: it adds its share
     own = len(names) - sum(k in state.fitted for k in names)
     max_nfev = math.ceil(max_nfev * len(names) / max(own, 1))
-    res = least_squares_log(fun, x0, lb, ub, max_nfev=max_nfev, diff_step=diff_step, pool=pool)
+    res = least_squares_log(fun, x0, lb, ub, max_nfev=max_nfev, diff_step=diff_step, pool=pool,
+                            give_up=None if give_up_rms is None
+                            else give_up_rms ** 2 * fun.size())
     if clock_step:
         res = fit_clock(res, fun, x0, lb, ub, model, df, state,
                         not isinstance(start_state, StartState) if clock_starts is None
