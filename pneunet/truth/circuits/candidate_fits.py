@@ -14,7 +14,7 @@ import numpy as np
 from ...common.errors import DataError, SolverError
 from ..core.lsq import Abandoned
 from ..core.verdict import Step, at_floor, indistinguishable
-from .clock import CLOCK_NUDGES, clock_moved, clock_unit
+from .clock import CLOCK_NUDGES, SHIFT, clock_moved, clock_unit
 from .data import compared_samples, signal_of_column
 from .fit import TraceFit, fit_trace, near_bound
 from .screen import SCREEN_KEEP, screen_candidates, step_starts
@@ -45,11 +45,14 @@ class CandidateFits:
         x.update(x_start)
         for k in p:
             x.setdefault(k, p[k][0])
+        state = state or self.state
+        if x.get(SHIFT):  # a screen point's clock, moved from its fit's
+            state = clock_moved(state, x.pop(SHIFT),
+                                clock_unit(state, self.df["time_s"].to_numpy(float)))
         return fit_trace(self.build, self.df, p, fixed=self.fixed, node=self.node,
                          window=self.train, effects=effs, max_nfev=max_nfev, pool=self.pool,
                          options=self.options, x_start=x, where=self.where,
-                         start_state=state or self.state, refined=refined,
-                         give_up_rms=give_up_rms)
+                         start_state=state, refined=refined, give_up_rms=give_up_rms)
 
     def refined(self, fit: TraceFit, max_nfev: int) -> TraceFit:
         """``fit`` fitted again from its values and refined
@@ -470,7 +473,8 @@ def unfitted_row(row, failed, n_res) -> dict:
 
 def screen_data(df, window, fit: TraceFit):
     """The screen's data on the fit window, (times, signals, measured, keep, scales,
-    alignment), and ``fit``'s Jacobian on those samples: the fit's compared samples less
+    alignment, and for a fit of the logger's clock its s per unit of shift), and
+    ``fit``'s Jacobian on those samples (the clock's column last): the fit's compared samples less
     those around a recorded jump, a storage node's too (a grid point misses a 400 kPa
     edge's timing by a fraction of a sample; that misfit, alike for every candidate,
     would hide the differences the screen looks for)."""
@@ -484,7 +488,8 @@ def screen_data(df, window, fit: TraceFit):
     rows = np.concatenate([keep[s][fitted[s]] for s in sigs])
     data = (times[mask], sigs, {s: meas[s][mask] for s in sigs}, keep, fit.scales,
             fit.extras.get("alignment"))
-    return data, fit.extras["jacobian"][rows]
+    clock_step = fit.extras.get("clock_step", 0.0)
+    return data + (clock_step,) * bool(clock_step), fit.extras["jacobian"][rows]
 
 
 def at_bound(fit: TraceFit) -> str:

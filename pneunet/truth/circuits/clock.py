@@ -288,6 +288,8 @@ class _Scan:
 
 #: the name under which a clock estimated from the record is fitted with the parameters
 CLOCK = "t0@clock"
+#: a start's clock moved from its fit's by this many sample spacings (a screen point's)
+SHIFT = "shift@clock"
 
 
 def clock_unit(state, times) -> float:

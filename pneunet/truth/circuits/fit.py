@@ -379,11 +379,10 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
             "there: an oscillation stops, a valve switches on another cycle): its "
             "derivative is the other side's, and its interval does not hold across that edge")
         info["note"] += "; " + info["cliff_note"]
-    jac = res.jac
     if clock_step:
         state = clock_fitted(state, res.x[-1], ci.pop(CLOCK), clock_step)
         se.pop(CLOCK)
-        model, jac = model.with_state(state), jac[:, :len(names)]
+        model = model.with_state(state)
     n = len(names)
     bounded = at_bounds(names, res.x[:n], lb[:n], ub[:n])
     if bounded:
@@ -415,7 +414,9 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
                     res.message + (f"; {fun.failures} failed simulations" if fun.failures else ""),
                     tuple(effects), sol, time.perf_counter() - wall, unit, scales,
                     {"stage1": stage1, "simulations": nfev, "intervals": info,
-                     "alignment": aligned, "jacobian": jac, "start_state": state,
+                     "alignment": aligned, "start_state": state,
+                     # a fitted clock's column last (its shift, per sample spacing)
+                     "jacobian": res.jac, "clock_step": clock_step,
                      "model": model, "recording": where,
                      "compared": {s: int(keep_all[s].sum()) for s in sigs},
                      "keep": keep_all,

@@ -12,6 +12,7 @@ import numpy as np
 
 from ...common.errors import PneunetError
 from ..core.lsq import evaluate_many
+from .clock import SHIFT
 from .model import TraceModel, TraceResidual
 from .start import initial_values
 
@@ -29,9 +30,17 @@ class ScreenTask:
 
     def __init__(self, effect, point, names, x_base, jac, bounds, model_args, data,
                  on_top=()):
+        """``x_base``: the fit's ln values of ``names``, and where ``data`` has a clock
+        step (a fit of the logger's clock) its shift last (0: the fit's clock), the
+        columns of ``jac`` and the ``bounds`` alike."""
         self.effect, self.point, self.names, self.x_base = effect, point, names, x_base
         self.on_top = tuple(on_top)  # effects already in the model (params among names)
         self.jac, self.bounds, self.model_args, self.data = jac, bounds, model_args, data
+
+    def _x(self, xb, theta):
+        """The residual's x: the base ln values, the effect's, the clock's shift last."""
+        n = len(self.names)
+        return np.concatenate([xb[:n], theta, xb[n:]])
 
     def __call__(self):
         eff = self.effect
@@ -43,7 +52,7 @@ class ScreenTask:
         xb, moved = self._recentred(model, names, theta)
         if model.failures:  # a point the circuit cannot be simulated at: no more time on it
             return self._failed(model)
-        r = fun(np.concatenate([xb, theta]))
+        r = fun(self._x(xb, theta))
         if model.failures:
             return self._failed(model)
         for _ in range(0 if moved else SCREEN_GN):
@@ -77,16 +86,22 @@ class ScreenTask:
         the base fit's Jacobian, at most ``cap`` in ln value (one simulation): (xb, r,
         True) at the new point where it lowers the residual, else the old and False."""
         step = np.linalg.lstsq(self.jac, -r, rcond=None)[0]
-        step *= min(1.0, cap / max(np.max(np.abs(step)), 1e-300))
+        n = len(self.names)  # the ln values capped at ``cap``, a clock's shift (samples) at
+        step *= min(1.0, cap / max(np.max(np.abs(step[:n]), initial=0.0), 1e-300),
+                    SCREEN_CLOCK_STEP / max(np.max(np.abs(step[n:]), initial=0.0), 1e-300))
         trial = np.clip(xb + step, *self.bounds)
-        r1 = fun(np.concatenate([trial, theta]))
+        r1 = fun(self._x(trial, theta))
         if model.failures or r1 @ r1 >= r @ r:
             return xb, r, False
         return trial, r1, True
 
     def _values(self, xb):
-        values = dict(zip(self.names, np.exp(xb)))
+        """Start values: the base parameters', the point's, a clock's shift (:data:`SHIFT`)."""
+        n = len(self.names)
+        values = dict(zip(self.names, np.exp(xb[:n])))
         values.update(self.point)
+        if len(xb) > n:
+            values[SHIFT] = float(xb[n])
         return values
 
 
@@ -100,7 +115,7 @@ class ScreenTask:
         changes the period much is judged after the period is matched."""
         times, sigs, meas = self.data[0], self.data[1], self.data[2]
         node = next((s for s in sigs if s.startswith("p_")), None)
-        if node is None:
+        if node is None or len(self.x_base) > len(self.names):  # no cycle: a driven circuit
             return self.x_base, False
         x = np.concatenate([self.x_base, theta])
         lb = np.concatenate([self.bounds[0], theta])
@@ -127,6 +142,10 @@ SCREEN_STEP = 0.25
 #: cycle does not re-centre them (a driven one)
 SCREEN_GN = 2
 SCREEN_GN_STEP = 0.5
+#: largest move of a fitted clock in one such step, sample spacings: the base fit's clock
+#: takes up some of what a missing effect does (the two tanks' heat exchange, recorded
+#: from 1.8 s after the supply's step: 18 ms, 0.9 samples)
+SCREEN_CLOCK_STEP = 2.0
 #: a screening point's simulation budget, (× the base fit's typical simulation, at
 #: least s; CPU time): a point that makes the circuit this much stiffer or chatter (a
 #: 4.3 kPa·s/mg tube in the oscillator's supply line: 545 jumps in 21 s) is a failed
@@ -152,6 +171,10 @@ def screen_candidates(cand, names, x_base, jac, params, model_args, data, pool, 
     ``on_top``, the effects that model already holds (their parameters among ``names``):
     each candidate is screened in addition to them."""
     bounds = (np.log([params[k][1] for k in names]), np.log([params[k][2] for k in names]))
+    if data is not None and len(data) > 6:  # the fit's clock: its shift within half a period
+        half = 0.5 * model_args[1]["state"].clock_period / data[6]
+        x_base, bounds = np.append(x_base, 0.0), (np.append(bounds[0], -half),
+                                                  np.append(bounds[1], half))
     tasks = [ScreenTask(e, p, names, x_base, jac, bounds, model_args, data, on_top)
              for e in cand for p in e.grid()]
     outs = evaluate_many(_run_task, tasks, pool)
