@@ -29,7 +29,7 @@ import numpy as np
 from ...common.reprs import Summarized, listed, number
 from ..core.locate import best_lag, hot_phases, phase_profile
 from ..core.noise import ROUNDING_SIGMA, difference_sigma, resolution, segments
-from ..core.verdict import (TOLERANCE, Step, at_floor, decide, needs_candidates,
+from ..core.verdict import (NEAR_FLOOR, TOLERANCE, Step, at_floor, decide, needs_candidates,
                             untested_note)
 from ..core.waterfall import Waterfall
 from .align import thinned
@@ -262,13 +262,15 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
         steps = [Step("base model", base_err, train=base.error(train))]
         ranking = [_row("none", base, test, floor)]
         notes = [f"base fit: {base.extras['intervals']['note']}", *thin_notes]
-        if train == test:
+        in_sample = train == test
+        if in_sample:
             notes.append("nothing is held out: a record of a circuit driven by its sources "
                          "with fewer than two cycles at the node is fitted whole, and its "
-                         "'held-out' errors are the fitted window's")
+                         "'held-out' errors are the fitted window's (two effects at once "
+                         f"count only within {NEAR_FLOOR:g}× the floor)")
         circuit = TraceModel(build, fixed, options=options, state=state).circuit(base.values)
         cand = candidates_for(circuit, effects)
-        verdict, accepted = decide(steps, floor, tolerance)
+        verdict, accepted = decide(steps, floor, tolerance, in_sample)
         fitting = CandidateFits(build, df, params, fixed, node, train, test, base, pool,
                                 options, where, state, floor, tolerance)
         if cand and needs_candidates(steps[0].worst, floor, tolerance):
@@ -308,7 +310,7 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
                     noise, floor = nb, nb["floor"]
                     noise["model"] = best
                     fitting.floor = floor
-                verdict, accepted = decide(steps, floor, tolerance)
+                verdict, accepted = decide(steps, floor, tolerance, in_sample)
                 if verdict == "unexplained":
                     t0 = time.perf_counter()
                     seconds = second_effects(fits, best, fitted, cand, params, fitting,
@@ -325,7 +327,7 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
                 ranking = [r if r["effect"] != "none" else _row("none", base, test, floor)
                            for r in ranking]
         # the steps' floor ratios may have changed with the floor: decide once more
-        verdict, accepted = decide(steps, floor, tolerance)
+        verdict, accepted = decide(steps, floor, tolerance, in_sample)
         name = " + ".join(accepted) or "none"
         if verdict != "unexplained" and refine_final(fits, name, fitting,
                                                      BASE_BUDGET * max_nfev, notes, say):
@@ -336,7 +338,7 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
                        _row(name, fits[name], test, floor, fitting.starts.get(name))
                        for r in ranking]
             base = fits["none"]
-            verdict, accepted = decide(steps, floor, tolerance)
+            verdict, accepted = decide(steps, floor, tolerance, in_sample)
         untested = untested_note(steps, floor, tolerance)
         if untested:
             notes.append(untested)
