@@ -80,3 +80,20 @@ def test_a_refit_that_cannot_beat_the_base_is_abandoned_with_a_note():
     assert fits["none"] is base and decide(steps, 0.3) == ("explained", ["tube@X1.in"])
     assert notes == ["base model fitted again from tube@X1.in's values: abandoned after 9 "
                      "simulations, at its pace it could not reach the base fit's 5 kPa"]
+
+
+def test_a_pair_fitted_on_everything_is_at_the_floor_only_as_the_verdict_judges_it():
+    """With nothing held out (train = test) the verdict takes two effects only within
+    NEAR_FLOOR × the floor, and the pair fits stop at the first pair 'at the floor' by
+    the same rule (one at 1.4× would have stopped them short of a better pair)."""
+    class Judged(Fitting):
+        at_floor = CandidateFits.at_floor
+        floor, tolerance = 0.3, 1.5
+
+    pair = Fit(held_out=0.42, effects=("heat", "tube"))  # 1.4× the floor
+    single = Fit(held_out=0.42, effects=("heat",))
+    fitting = Judged(None)
+    assert fitting.at_floor(single) and fitting.at_floor(pair)
+    fitting.test = fitting.train
+    assert fitting.at_floor(single) and not fitting.at_floor(pair)
+    assert fitting.at_floor(Fit(held_out=0.35, effects=("heat", "tube")))  # 1.17×
