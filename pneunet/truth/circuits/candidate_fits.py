@@ -13,7 +13,7 @@ import numpy as np
 
 from ...common.errors import DataError, SolverError
 from ..core.lsq import Abandoned
-from ..core.verdict import NEAR_FLOOR, Step, at_floor, indistinguishable
+from ..core.verdict import Step, at_floor, indistinguishable, step_tolerance
 from .clock import CLOCK_NUDGES, SHIFT, clock_moved, clock_unit
 from .data import compared_samples, signal_of_column
 from .fit import TraceFit, fit_trace, near_bound
@@ -113,11 +113,10 @@ class CandidateFits:
     def at_floor(self, fit) -> bool:
         """Whether ``fit`` is at the noise floor on the held-out window and on its fitted
         one (as :func:`~pneunet.truth.core.verdict.decide` judges it: two effects on a
-        record with nothing held out within :data:`~pneunet.truth.core.verdict.NEAR_FLOOR`)."""
-        tolerance = self.tolerance
-        if self.train == self.test and len(fit.effects) > 1:
-            tolerance = min(NEAR_FLOOR, tolerance)
-        return at_floor(self.score(fit), self.floor, tolerance)
+        record with nothing held out within :data:`~pneunet.truth.core.verdict.NEAR_FLOOR`:
+        :func:`~pneunet.truth.core.verdict.step_tolerance`)."""
+        return at_floor(self.score(fit), self.floor,
+                        step_tolerance(fit.effects, self.tolerance, self.train == self.test))
 
     def start(self, eff, x_start, max_nfev, kind: str, state=None,
               give_up_rms=None) -> TraceFit | Abandoned | None:

@@ -82,6 +82,13 @@ def needs_candidates(base_error: float, floor: float, tolerance: float = TOLERAN
     return not at_floor(base_error, floor, min(NEAR_FLOOR, tolerance))
 
 
+def step_tolerance(effects, tolerance: float = TOLERANCE, in_sample: bool = False) -> float:
+    """The factor of the floor within which a model with ``effects`` counts as at the
+    floor: ``tolerance``, or :data:`NEAR_FLOOR` for two effects or more fitted to the very
+    samples they are judged on (``in_sample``: nothing held out; see :func:`decide`)."""
+    return min(NEAR_FLOOR, tolerance) if in_sample and len(effects) > 1 else tolerance
+
+
 def decide(steps: list[Step], floor: float, tolerance: float = TOLERANCE,
            in_sample: bool = False) -> tuple[str, list]:
     """(verdict, accepted effect names) from the waterfall ``steps`` (base first, then
@@ -101,7 +108,7 @@ def decide(steps: list[Step], floor: float, tolerance: float = TOLERANCE,
     near = min(NEAR_FLOOR, tolerance)
 
     def bar(step):
-        return near if in_sample and len(step.effects) > 1 else tolerance
+        return step_tolerance(step.effects, tolerance, in_sample)
 
     if not at_floor(base, floor, tolerance):
         accepted = next((list(s.effects) for s in steps[1:]
