@@ -1,5 +1,6 @@
 """Which screened candidates a diagnosis fits fully (candidate_fits.fit_screened): the
-best two (a third within SCREEN_KEEP), then — when none reaches the floor — the next
+best and those within SCREEN_KEEP of it (three at most), the second best whatever its
+merit when none of those reaches the floor, then — while none does — the next
 ones the screen cannot tell from the best, in its order, until one does, then second
 starts for the first round and for later ones that stayed in the base fit's valley, then
 the best fit continued where its budget stopped it; a candidate the screen shows clearly
@@ -90,6 +91,21 @@ def test_one_the_screen_shows_clearly_worse_is_never_fitted():
     # second starts for the first round only (none later), best first; e3 never
     assert fitting.calls == [("e0", "first"), ("e1", "first"), ("e2", "first"),
                              ("e0", "second"), ("e1", "second"), ("e2", "second")]
+
+
+def test_a_second_best_the_screen_shows_clearly_worse_is_fitted_only_if_the_best_misses():
+    """The best reaches the floor: a second best screened more than SCREEN_KEEP worse is
+    not fitted (it would only cost time).  The best misses the floor: the second best is
+    fitted however much worse its merit (the screen misranked a control-line tube behind
+    a dead volume), and it reaching the floor ends the search."""
+    screened = rows(1.0, 2 * SCREEN_KEEP, 3 * SCREEN_KEEP)
+    fitting = Fitting({"e0": 0.9, "e1": 0.5, "e2": 0.5})
+    fit_screened(screened, {}, fitting, 3, 160, lambda m: None)
+    assert fitting.calls == [("e0", "first")]
+    fitting = Fitting({"e0": 9, "e1": 0.9, "e2": 0.5})
+    fits = {}
+    fit_screened(screened, fits, fitting, 3, 160, lambda m: None)
+    assert fitting.calls == [("e0", "first"), ("e1", "first")] and set(fits) == {"e0", "e1"}
 
 
 def test_a_first_round_at_the_floor_stops_there():

@@ -159,9 +159,12 @@ class CandidateFits:
 
 
 def fit_screened(rows, fits, fitting, screen, max_nfev, say) -> None:
-    """Fit the screened candidates ``rows`` (best first) into ``fits``: the best two and
-    a third (``screen``: at most that many) within :data:`SCREEN_KEEP` of the best's
-    merit, each from its screen's best point moved by one Gauss–Newton step.  When none
+    """Fit the screened candidates ``rows`` (best first) into ``fits``: the best and the
+    next ones (``screen``: at most that many) within :data:`SCREEN_KEEP` of its merit,
+    each from its screen's best point moved by one Gauss–Newton step; the second best
+    whatever its merit when none of them reaches the floor (the screen misranks: a
+    control-line tube screened 1.5× worse in rms than a dead volume that missed the
+    floor, and only the tube's full fit reached it).  When none
     reaches the floor, the next candidates the screen cannot tell from the best (merit
     within :data:`SCREEN_KEEP`), in its order, until one does: around a base fit bent
     far by the missing effect, the screen's linearisation ranks the right one anywhere
@@ -170,10 +173,14 @@ def fit_screened(rows, fits, fitting, screen, max_nfev, say) -> None:
     each later one whose fit stayed in the base fit's valley (:data:`STAYED`); then the
     best fit, if its budget stopped it, continued (:func:`continue_stopped`)."""
     best_rss = rows[0]["rss"]
-    close = rows[:min(2, screen)] + [r for r in rows[2:screen] if r["rss"] <= SCREEN_KEEP * best_rss]
+    close = rows[:min(1, screen)] + [r for r in rows[1:screen] if r["rss"] <= SCREEN_KEEP * best_rss]
     step_starts(close, fitting.pool)
     for row in close:
         _fit_row(row, fits, fitting, max_nfev, say)
+    if len(close) < min(2, screen, len(rows)) and not fitting.reached(fits):  # the second
+        close.append(rows[len(close)])
+        step_starts(close[-1:], fitting.pool)
+        _fit_row(close[-1], fits, fitting, max_nfev, say)
     close = _replace_failed(rows, close, fits, fitting, max_nfev, say)
     more = [r for r in rows[len(close):] if r["rss"] <= SCREEN_KEEP * best_rss]
     for row in more:

@@ -132,8 +132,9 @@ class ScreenTask:
 
 #: the screen's third best is fitted fully when its merit (fit-window residual sum of
 #: squares) is within this factor of the best's (rms within 1.5×, the verdict's
-#: tolerance); the best two always are (a control-line tube's screen merit is 1.5× a dead
-#: volume's in rms, and only its full fit reaches the floor)
+#: tolerance); the second best is whatever its merit when none of those reaches the floor
+#: (a control-line tube's screen merit is 1.5× a dead volume's in rms, and only its full
+#: fit reaches the floor)
 SCREEN_KEEP = 2.25
 #: largest change of a base parameter (ln value) in a kept candidate's start step
 SCREEN_STEP = 0.25
