@@ -250,3 +250,37 @@ def test_an_effect_the_fitted_clock_takes_up_is_screened_with_the_clock():
         assert lo <= TRUTH[k] <= hi, (k, fit.values[k], fit.ci[k])
     lo, hi = fit.start_state.clock_ci
     assert lo <= start <= hi and hi - lo < 0.005, fit.start_state.clock_ci
+
+
+RINGING = """* a supply that rings down (a damped SIN) charging a tank through a line
+.param R=0.5
+P1 supply SIN(200kPa 60kPa 0.5Hz 0 {damping})
+R1 supply tank {R}
+Vt tank 30mL
+.tran 10ms 12s
+"""
+
+
+@pytest.mark.parametrize("damping, unplaced", [(0.2, True), (0.0, False)])
+def test_sources_a_record_cannot_place_are_named_where_the_files_clock_is_taken(
+        tmp_path, damping, unplaced):
+    """A damped SIN is neither periodic nor changes a finite number of times: a record
+    cannot place it on the netlist's clock, so the file's is taken, and the start state
+    says so, naming the source and --time-offset (before: silently).  An undamped SIN is
+    placed by its period: no such note.  Recorded from netlist time 0 (the note is about
+    what the fit could not check, not about a misfit)."""
+    path = tmp_path / "ringing.pn"
+    path.write_text(RINGING.replace("{damping}", str(damping)))
+    build = NetlistBuilder(str(path))
+    sol = build({"R": 0.5}).tran(8.0, t_step=0.02)
+    t = np.arange(0.0, 8.0, 0.02)
+    rng = np.random.default_rng(1)
+    rec = __import__("pandas").DataFrame(
+        {"time_s": t, "p_tank_kPa": np.interp(t, sol.t, sol.pressure("tank"))
+         + 0.3 * rng.standard_normal(t.size)})
+    fit = fit_trace(build, rec, {"R": (0.4, 0.05, 5.0)}, node="tank")
+    said = fit.start_state.describe()
+    assert ("P1" in said and "--time-offset" in said) is unplaced, said
+    assert fit.values["R"] == pytest.approx(0.5, rel=0.05)
+    fit = fit_trace(build, rec, {"R": (0.4, 0.05, 5.0)}, node="tank", time_offset=0.0)
+    assert "--time-offset" not in fit.start_state.describe()  # a clock the user gave

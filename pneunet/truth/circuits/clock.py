@@ -116,6 +116,21 @@ def source_changes(circuit) -> tuple[float, float] | None:
     return (float(min(corners)), float(max(corners))) if corners else None
 
 
+def unplaced_sources(circuit, origin: float, span: float) -> list[str]:
+    """Names of ``circuit``'s sources that vary within the file's window [``origin``,
+    ``origin`` + ``span``] (s) but that a record cannot place on the netlist's clock:
+    neither periodic nor changing a finite number of times in closed form (a Python
+    function, a damped SIN, a sampled waveform).  With one, the file's clock is taken
+    as the netlist's, and a logger started elsewhere misplaces them unnoticed."""
+    from ...physics.waveforms import PiecewiseLinear, Pulse, Step
+
+    varying = varying_waveforms(circuit, origin, origin + span)
+    return [name for name, spec in circuit.elements.items()
+            if any(v is w and common_period([v]) is None
+                   and not isinstance(v, (Step, PiecewiseLinear, Pulse))
+                   for v in spec.params.values() for w in varying)]
+
+
 def _changing_corners(wave) -> list[float]:
     """The corners (s) of a waveform that changes a finite number of times at which its
     value changes on one side (not a PWL's first point, held from before)."""

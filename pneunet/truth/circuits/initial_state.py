@@ -262,6 +262,15 @@ def choose_start(model, values: dict, data, mode: str = "auto",
     (:mod:`.clock`)."""
     if mode not in START_MODES:
         raise ParameterError(f"start {mode!r} is not one of {', '.join(START_MODES)}")
+    state = _placed_start(model, values, data, mode, time_offset, where)
+    if time_offset is None and mode != "settled" and not state.clock:
+        state = _unplaced_note(state, model, values, data)
+    return state
+
+
+def _placed_start(model, values: dict, data, mode: str, time_offset: float | None,
+                  where: str) -> StartState:
+    """:func:`choose_start` before the note on sources a record cannot place."""
     clock = ""
     if time_offset is None and mode != "settled":
         origin = float(data.attrs.get("time_origin", 0.0))
@@ -286,6 +295,23 @@ def choose_start(model, values: dict, data, mode: str = "auto",
                          "rest state (no record from switch-on); " + clock)
     state = _start_at(model, values, data, mode, time_offset, where)
     return replace(state, clock=clock, clock_period=period) if clock else state
+
+
+def _unplaced_note(state: StartState, model, values: dict, data) -> StartState:
+    """``state`` with a note in its reason where the file's clock was taken for sources a
+    record cannot place (:func:`~pneunet.truth.circuits.clock.unplaced_sources`)."""
+    from .clock import unplaced_sources
+
+    times = data["time_s"].to_numpy()
+    unplaced = unplaced_sources(model.base_circuit(values),
+                                float(data.attrs.get("time_origin", 0.0)), float(times[-1]))
+    if not unplaced:
+        return state
+    return replace(state, reason="; ".join(filter(None, [state.reason, (
+        f"the file's clock is taken as the netlist's: {', '.join(unplaced)} (a Python "
+        "function, a damped SIN or a sampled waveform) cannot be placed from the record; "
+        "if the logger was not started at the file's time 0 on the netlist's clock, give "
+        "the first sample's netlist time (--time-offset)")])))
 
 
 def _start_at(model, values: dict, data, mode: str, time_offset: float | None,
