@@ -14,10 +14,13 @@ fitted with V2 given, so no volume can take it up).
     python benchmarks/study_two_tanks.py                  # 3 starts per case
     python benchmarks/study_two_tanks.py --runs 6 --seed 5 --rate 20
     python benchmarks/study_two_tanks.py --pulse          # a square-wave supply instead
+    python benchmarks/study_two_tanks.py --sine           # a sine supply instead
 
 ``--pulse``: the supply a square wave (96 kPa until 1 s, then 296 kPa for 3 s in every
 6 s; netlists/two_tanks_pulse.pn), the logger started at a random time 4-30 s after
 switch-on, 36 s recorded: a periodic driven circuit whose clock the diagnosis must find.
+``--sine``: the supply 196 − 100·cos(2π·0.2·t) kPa (netlists/two_tanks_sine.pn: a SIN
+with a phase), started and recorded as ``--pulse``: a drive without edges.
 """
 from __future__ import annotations
 
@@ -44,15 +47,18 @@ def main(argv=None) -> None:
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--rate", type=float, default=50.0, help="samples per second")
     ap.add_argument("--pulse", action="store_true", help="a square-wave supply")
+    ap.add_argument("--sine", action="store_true", help="a sine supply")
     args = ap.parse_args(argv)
 
     from pneunet.netlist.builder import NetlistBuilder
     from pneunet.truth.circuits import diagnose_trace
-    from tests.traces.standalone_tanks import TRUTH, square_supply, supply, tanks_record
+    from tests.traces.standalone_tanks import (TRUTH, sine_supply, square_supply, supply,
+                                               tanks_record)
 
     netlist, source = ("two_tanks_pulse.pn", square_supply) if args.pulse \
-        else ("two_tanks.pn", supply)
-    starts, seconds = ((4.0, 30.0), 36.0) if args.pulse else ((0.3, 3.5), 18.0)
+        else ("two_tanks_sine.pn", sine_supply) if args.sine else ("two_tanks.pn", supply)
+    periodic = args.pulse or args.sine
+    starts, seconds = ((4.0, 30.0), 36.0) if periodic else ((0.3, 3.5), 18.0)
     build = NetlistBuilder(str(ROOT / "netlists" / netlist))
     params = {"R1": (0.7, 0.05, 5.0), "R2": (1.5, 0.1, 20.0)}
     fixed = {"V1": TRUTH["V1"], "V2": TRUTH["V2"]}
