@@ -116,6 +116,16 @@ def source_changes(circuit) -> tuple[float, float] | None:
     return (float(min(corners)), float(max(corners))) if corners else None
 
 
+def repeating_drive(circuit, origin: float, span: float) -> float:
+    """The common period (s) of ``circuit``'s sources where they only repeat within the
+    file's window [``origin``, ``origin`` + ``span``] (s): every source that varies there
+    periodic, none changing once; 0 otherwise (a step, a PWL, a Python function)."""
+    waves = varying_waveforms(circuit, origin, origin + span)
+    if not waves or source_changes(circuit) is not None:
+        return 0.0
+    return common_period(waves) or 0.0
+
+
 def unplaced_sources(circuit, origin: float, span: float) -> list[str]:
     """Names of ``circuit``'s sources that vary within the file's window [``origin``,
     ``origin`` + ``span``] (s) but that a record cannot place on the netlist's clock:

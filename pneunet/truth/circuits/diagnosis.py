@@ -218,10 +218,11 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
     fit, serves every fit); ``effects``: candidate effects (kinds,
     bound effects or their names; default every registered one at every site);
     ``max_nfev``: cap on a fit's simulations (:data:`BASE_BUDGET` × for the base
-    fit); ``screen``: how many of the best screened candidates may be fitted fully (the best
-    two, a third within :data:`SCREEN_KEEP` of the best's merit; 4 × ``max_nfev``:
-    they have more parameters and start further away), each from its screen's best
-    point, and when none reaches the floor each again from a second start;
+    fit); ``screen``: how many of the best screened candidates may be fitted fully (the
+    best, the next within :data:`SCREEN_KEEP` of its merit, the second best whatever its
+    merit when none of those reaches the floor; 4 × ``max_nfev``: they have more
+    parameters and start further away), each from its screen's best point, and when
+    none reaches the floor each again from a second start;
     ``workers``: processes
     for parallel finite differences (None: 2 where there are 2 cores); ``progress``:
     a callable taking a message (e.g. ``print`` to stderr)."""
@@ -347,6 +348,8 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
             notes.append(f"{' + '.join(accepted) or 'base model'}: {final.unconverged()}")
         if final is not base and "undetermined_note" in final.extras["intervals"]:
             notes.append(f"{' + '.join(accepted)}: {final.extras['intervals']['undetermined_note']}")
+        if verdict != "unexplained" and driven:
+            notes += repeating_note(circuit, df)
         where_txt = [] if verdict != "unexplained" else locate(final, test, floor, df, node)
         if verdict == "unexplained" and not where_txt:
             where_txt = ["the held-out error is above the floor on every signal by a similar "
@@ -371,6 +374,23 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
     return TraceDiagnosis(verdict, accepted, floor, unit, ranking, fits, wf, where_txt,
                           {k: v for k, v in noise.items()}, train, test, timing, notes,
                           signal_table(base, final, test, noise, tolerance), thin)
+
+
+def repeating_note(circuit, df) -> list[str]:
+    """A note (a list of one, or none) for a record of a circuit whose sources only
+    repeat (:func:`~pneunet.truth.circuits.clock.repeating_drive`): its held-out periods
+    repeat the fitted ones, so passing them says less than on a record through a change."""
+    from .clock import repeating_drive
+
+    period = repeating_drive(circuit, float(df.attrs.get("time_origin", 0.0)),
+                             float(df["time_s"].iloc[-1]))
+    if not period:
+        return []
+    return [f"the sources repeat every {period:g} s, so the held-out periods repeat the "
+            "fitted ones: they test that the model reproduces this cycle, not that its "
+            "values are the circuit's (two tanks driven by a sine with a dead end the model "
+            "lacks: adequate at 1.1× the floor with both lines' R 20–30 % off); a record "
+            "through a change of the drive (a step, another period or amplitude) tests more"]
 
 
 def _sources_vary(build, fixed, params, options, df) -> bool:
