@@ -130,11 +130,11 @@ class ScreenTask:
         return x[:len(self.x_base)], True
 
 
-#: the screen's third best is fitted fully when its merit (fit-window residual sum of
-#: squares) is within this factor of the best's (rms within 1.5×, the verdict's
-#: tolerance); the second best is whatever its merit when none of those reaches the floor
-#: (a control-line tube's screen merit is 1.5× a dead volume's in rms, and only its full
-#: fit reaches the floor)
+#: the screen's second and third best are fitted fully when their merits (fit-window
+#: residual sums of squares) are within this factor of the best's (rms within 1.5×, the
+#: verdict's tolerance); the second best is, whatever its merit, when none of those
+#: reaches the floor (a control-line tube's screen merit is 1.5× a dead volume's in rms,
+#: and only its full fit reaches the floor)
 SCREEN_KEEP = 2.25
 #: largest change of a base parameter (ln value) in a kept candidate's start step
 SCREEN_STEP = 0.25
