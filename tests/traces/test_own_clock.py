@@ -332,3 +332,20 @@ def test_a_drive_that_only_repeats_is_noted_as_testing_one_cycle(netlist, period
     note = repeating_note(circuit, pd.DataFrame({"time_s": [0.0, 30.0]}))
     assert bool(note) == bool(period)
     assert not note or f"every {period:g} s" in note[0]
+
+
+def test_which_sources_a_record_cannot_place():
+    """A Python function and a damped SIN are named; a sine, a square wave, a STEP or a
+    constant are not (their clock is read from the record, or nothing varies)."""
+    from pneunet.physics.waveforms import Constant, Function, Pulse, Sine, Step
+    from pneunet.truth.circuits.clock import unplaced_sources
+
+    circuit = NetlistBuilder("netlists/two_tanks_sine.pn")({})
+    spec = circuit.elements["PS"]
+    for wave, named in [(Function(lambda t: 196.0 + 50.0 * np.tanh(t - 3.0)), True),
+                        (Sine(196, 100, 0.2, damping=0.3), True),
+                        (Sine(196, 100, 0.2), False),
+                        (Pulse(96, 296, 1, 0.02, 0.02, 2.98, 6), False),
+                        (Step(96, 296, 2.0), False), (Constant(296.0), False)]:
+        spec.params["value"] = wave
+        assert unplaced_sources(circuit, 0.0, 20.0) == (["PS"] if named else []), wave

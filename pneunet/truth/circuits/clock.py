@@ -103,17 +103,23 @@ def source_changes(circuit) -> tuple[float, float] | None:
     change alone fixes the netlist time (a supply switched on while the valves pulse).
     None when none changes a finite number of times, or a source is not known in closed
     form (a Python function, a damped SIN)."""
-    from ...physics.waveforms import PiecewiseLinear, Pulse, Step
-
     corners = []
     for v in _waveforms(circuit):
         if common_period([v]) is not None:
             continue
-        if not (isinstance(v, (Step, PiecewiseLinear)) or
-                (isinstance(v, Pulse) and not v.period > 0)):
+        if not _one_shot(v):
             return None
         corners.extend(_changing_corners(v))
     return (float(min(corners)), float(max(corners))) if corners else None
+
+
+def _one_shot(wave) -> bool:
+    """Whether ``wave`` changes a finite number of times, known in closed form (a STEP, a
+    PWL, a PULSE without a period)."""
+    from ...physics.waveforms import PiecewiseLinear, Pulse, Step
+
+    return isinstance(wave, (Step, PiecewiseLinear)) or \
+        (isinstance(wave, Pulse) and not wave.period > 0)
 
 
 def repeating_drive(circuit, origin: float, span: float) -> float:
@@ -132,13 +138,10 @@ def unplaced_sources(circuit, origin: float, span: float) -> list[str]:
     neither periodic nor changing a finite number of times in closed form (a Python
     function, a damped SIN, a sampled waveform).  With one, the file's clock is taken
     as the netlist's, and a logger started elsewhere misplaces them unnoticed."""
-    from ...physics.waveforms import PiecewiseLinear, Pulse, Step
-
-    varying = varying_waveforms(circuit, origin, origin + span)
+    varying = {id(w) for w in varying_waveforms(circuit, origin, origin + span)}
     return [name for name, spec in circuit.elements.items()
-            if any(v is w and common_period([v]) is None
-                   and not isinstance(v, (Step, PiecewiseLinear, Pulse))
-                   for v in spec.params.values() for w in varying)]
+            if any(id(v) in varying and common_period([v]) is None and not _one_shot(v)
+                   for v in spec.params.values())]
 
 
 def _changing_corners(wave) -> list[float]:
@@ -186,7 +189,7 @@ def source_clock(circuit, data, origin: float,
     span = float(times[-1]) if len(times) else 0.0
     waves = varying_waveforms(circuit, origin, origin + span)
     changes = source_changes(circuit)  # a one-off change fixes the netlist time
-    period = common_period(waves) if waves and changes is None else None
+    period = repeating_drive(circuit, origin, span) or None
     if (period is None and changes is None) or len(times) < 10:
         return origin, "", 0.0
     dt = float(np.median(np.diff(times)))
