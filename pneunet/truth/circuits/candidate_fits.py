@@ -36,7 +36,8 @@ class CandidateFits:
         self.screen_setup = None
         self.screen_simulations = 0  # simulations of second starts' and second effects' screens
 
-    def _fit(self, effs, x_start, max_nfev, refined=False, state=None, give_up_rms=None):
+    def _fit(self, effs, x_start, max_nfev, refined=False, state=None, give_up_rms=None,
+             converged_jac=None):
         p = {k: (float(np.clip(self.base.values[k], lo, hi)), lo, hi)
              for k, (_, lo, hi) in self.params.items()}
         for e in effs:
@@ -52,13 +53,17 @@ class CandidateFits:
         return fit_trace(self.build, self.df, p, fixed=self.fixed, node=self.node,
                          window=self.train, effects=effs, max_nfev=max_nfev, pool=self.pool,
                          options=self.options, x_start=x, where=self.where,
-                         start_state=state, refined=refined, give_up_rms=give_up_rms)
+                         start_state=state, refined=refined, give_up_rms=give_up_rms,
+                         converged_jac=converged_jac)
 
     def refined(self, fit: TraceFit, max_nfev: int) -> TraceFit:
-        """``fit`` fitted again from its values and refined
-        (:func:`~pneunet.truth.circuits.fit.refine_fit`); a SolverError when that fails."""
+        """``fit`` refined (:func:`~pneunet.truth.circuits.fit.refine_fit`) from its
+        values: from its Jacobian there where it converged, else fitted again first; a
+        SolverError when that fails."""
+        converged = fit.success and not fit.on_budget
         return self._fit(fit.effects, dict(fit.values), max_nfev, refined=True,
-                         state=fit.start_state)
+                         state=fit.start_state,
+                         converged_jac=fit.extras.get("jacobian") if converged else None)
 
     def base_start(self, guesses: bool = False) -> dict:
         """Starting values of the base parameters: the base fit's, except where it

@@ -22,8 +22,8 @@ import numpy as np
 from ...common.errors import DataError, ParameterError, PneunetError
 from ...common.reprs import Summarized, listed, number
 from ..core.intervals import intervals
-from ..core.lsq import (jacobian_spread, least_squares_log, refine, secant_checked,
-                        secant_note)
+from ..core.lsq import (LsqResult, jacobian_spread, least_squares_log, refine,
+                        secant_checked, secant_note)
 from ..core.noise import record_sigma, segments
 from .align import Alignment, thinned
 from .clock import CLOCK, clock_fitted, clock_unit, fit_clock
@@ -208,7 +208,8 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
               align: bool = True, start_state="auto",
               time_offset: float | None = None, refined: bool = True,
               clock_starts: bool | None = None, thin: bool = False,
-              give_up_rms: float | None = None) -> TraceFit:
+              give_up_rms: float | None = None,
+              converged_jac: np.ndarray | None = None) -> TraceFit:
     """Estimate ``params`` ({name: (guess, low, high)}) so the circuit reproduces ``data``.
 
     ``build(point) -> Circuit`` (or a :class:`~pneunet.netlist.builder.NetlistBuilder`)
@@ -238,7 +239,10 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
     kPa for 0.3 of noise, on every sample 0.41 % at 0.307); ``give_up_rms``: an rms
     (in the fit's unit) the fit is of use only below: an
     :class:`~pneunet.truth.core.lsq.Abandoned` is raised where, at its pace, its budget
-    would not bring it there (:func:`~pneunet.truth.core.lsq.least_squares_log`).
+    would not bring it there (:func:`~pneunet.truth.core.lsq.least_squares_log`);
+    ``converged_jac``: with ``refined``, ``x_start`` and ``start_state``, the Jacobian
+    (``extras['jacobian']``) of a fit that converged there: it is refined from that
+    point without being fitted again (:func:`_converged_at`).
     A driven record whose first samples are off rest, after its sources began to
     change, is fitted from them and from the netlist's rest state driven by its sources
     up to the first sample (:func:`~pneunet.truth.circuits.driven_start.better_start`;
@@ -347,10 +351,12 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
     # each initial pressure fitted costs a Jacobian column per step: it adds its share
     own = len(names) - sum(k in state.fitted for k in names)
     max_nfev = math.ceil(max_nfev * len(names) / max(own, 1))
-    res = least_squares_log(fun, x0, lb, ub, max_nfev=max_nfev, diff_step=diff_step, pool=pool,
-                            give_up=None if give_up_rms is None
-                            else give_up_rms ** 2 * fun.size())
-    if clock_step:
+    res = _converged_at(fun, x0, converged_jac) if refined else None
+    if res is None:
+        res = least_squares_log(fun, x0, lb, ub, max_nfev=max_nfev, diff_step=diff_step,
+                                pool=pool, give_up=None if give_up_rms is None
+                                else give_up_rms ** 2 * fun.size())
+    if clock_step and res.message != CONVERGED_BEFORE:
         res = fit_clock(res, fun, x0, lb, ub, model, df, state,
                         not isinstance(start_state, StartState) if clock_starts is None
                         else clock_starts, max_nfev=max_nfev,
@@ -435,6 +441,25 @@ def _samples(df, sigs, cols, window, where):
     if mask.sum() < 5:
         raise DataError("fewer than 5 samples in the fit window", where=where)
     return times, meas, mask
+
+
+#: the message of a fit taken as converged from an earlier fit (:func:`_converged_at`)
+CONVERGED_BEFORE = "converged in the fit it refines"
+
+
+def _converged_at(fun: TraceResidual, x, jac) -> LsqResult | None:
+    """The least-squares result of a fit that converged at ``x`` with Jacobian ``jac``
+    (its columns ``fun``'s parameters, a clock's shift last): ``fun`` evaluated there
+    once, where LM from ``x`` would spend a Jacobian and a step to stay (the oscillator's
+    polytropic fit: 11 simulations, 1 s of a diagnosis).  None without ``jac``, when its
+    shape does not match or the simulation fails."""
+    if jac is None or jac.shape != (fun.size(), len(x)):
+        return None
+    failures = fun.failures
+    r = fun(x)
+    if fun.failures > failures or not np.all(np.isfinite(r)):
+        return None
+    return LsqResult(np.array(x, float), r, np.array(jac, float), 1, True, CONVERGED_BEFORE)
 
 
 def refine_fit(res, fun: TraceResidual, lb, ub, max_nfev: int, pool):
