@@ -117,3 +117,27 @@ def test_two_effects_judged_on_their_own_fitted_window_must_come_nearer_the_floo
     assert decide(steps, FLOOR, in_sample=in_sample) == want
     single = [steps[0], Step("+heat", 1.43 * FLOOR, effects=("heat",), train=1.43 * FLOOR)]
     assert decide(single, FLOOR, in_sample=True) == ("explained", ["heat"])
+
+
+@pytest.mark.parametrize("base, effect, shaped, want", [
+    (1.15, 1.0, True, ("explained", ["heat"])),   # structured: looked for, and 13 % lower
+    (1.15, 1.0, False, ("adequate", [])),         # white: within NEAR_FLOOR, nothing claimed
+    (1.15, 1.06, True, ("adequate", [])),         # lower, but not by NEAR_GAIN
+    (0.98, 0.85, True, ("adequate", [])),         # at the floor itself: nothing to look for
+])
+def test_a_base_within_near_floor_with_structured_residuals_yields_to_a_clearly_lower_effect(
+        base, effect, shaped, want):
+    """The two tanks driven by a sine with heat exchange in tank 1: base at 1.199× the
+    floor, residuals with Ljung–Box p = 1e-230, R₁ 5 % off, called adequate unscreened;
+    their clean records at 1.02–1.06× with p = 0.03–0.48."""
+    steps = [Step("base", base * FLOOR), Step("+heat", effect * FLOOR, effects=("heat",))]
+    assert decide(steps, FLOOR, structured=shaped) == want
+    assert needs_candidates(base * FLOOR, FLOOR, structured=shaped) is (shaped and base > 1.0)
+
+
+def test_structure_is_a_ljung_box_p_far_below_the_whites():
+    from pneunet.truth.core.verdict import STRUCTURE_P, structured
+
+    assert structured(1e-230) and structured(0.1 * STRUCTURE_P)
+    assert not structured(STRUCTURE_P) and not structured(0.03) and not structured(0.48)
+    assert not structured(float("nan"))

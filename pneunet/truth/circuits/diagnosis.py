@@ -29,8 +29,8 @@ import numpy as np
 from ...common.reprs import Summarized, listed, number
 from ..core.locate import best_lag, hot_phases, phase_profile
 from ..core.noise import ROUNDING_SIGMA, difference_sigma, resolution, segments
-from ..core.verdict import (NEAR_FLOOR, TOLERANCE, Step, at_floor, decide, needs_candidates,
-                            untested_note)
+from ..core.verdict import (NEAR_FLOOR, NEAR_GAIN, TOLERANCE, Step, at_floor, decide, needs_candidates,
+                            structured, untested_note)
 from ..core.waterfall import Waterfall
 from .align import thinned
 from .candidate_fits import (CandidateFits, at_bound, base_refit, fit_limits, fit_pairs,
@@ -271,10 +271,19 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
                          f"count only within {NEAR_FLOOR:g}× the floor)")
         circuit = TraceModel(build, fixed, options=options, state=state).circuit(base.values)
         cand = candidates_for(circuit, effects)
-        verdict, accepted = decide(steps, floor, tolerance, in_sample)
+        # a base within NEAR_FLOOR whose residuals are strongly structured is screened too
+        lb_p = base.extras["intervals"].get("ljung_box_p", math.nan)
+        shaped = structured(lb_p)
+        verdict, accepted = decide(steps, floor, tolerance, in_sample, shaped)
         fitting = CandidateFits(build, df, params, fixed, node, train, test, base, pool,
                                 options, where, state, floor, tolerance)
-        if cand and needs_candidates(steps[0].worst, floor, tolerance):
+        if cand and needs_candidates(steps[0].worst, floor, tolerance, shaped):
+            if not needs_candidates(steps[0].worst, floor, tolerance):
+                notes.append(
+                    f"base model within {NEAR_FLOOR:g}× the floor "
+                    f"({steps[0].worst / floor:.2f}×) but its residuals strongly structured "
+                    f"(Ljung–Box p = {lb_p:.2g}): the candidates were screened, and one is "
+                    f"accepted only where it takes the error {NEAR_GAIN:.0%} lower")
             say(f"screening {len(cand)} candidate effects")
             t0 = time.perf_counter()
             names = list(params)
@@ -311,7 +320,7 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
                     noise, floor = nb, nb["floor"]
                     noise["model"] = best
                     fitting.floor = floor
-                verdict, accepted = decide(steps, floor, tolerance, in_sample)
+                verdict, accepted = decide(steps, floor, tolerance, in_sample, shaped)
                 if verdict == "unexplained":
                     t0 = time.perf_counter()
                     seconds = second_effects(fits, best, fitted, cand, params, fitting,
@@ -328,7 +337,7 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
                 ranking = [r if r["effect"] != "none" else _row("none", base, test, floor)
                            for r in ranking]
         # the steps' floor ratios may have changed with the floor: decide once more
-        verdict, accepted = decide(steps, floor, tolerance, in_sample)
+        verdict, accepted = decide(steps, floor, tolerance, in_sample, shaped)
         name = " + ".join(accepted) or "none"
         if verdict != "unexplained" and refine_final(fits, name, fitting,
                                                      BASE_BUDGET * max_nfev, notes, say):
@@ -339,7 +348,7 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
                        _row(name, fits[name], test, floor, fitting.starts.get(name))
                        for r in ranking]
             base = fits["none"]
-            verdict, accepted = decide(steps, floor, tolerance, in_sample)
+            verdict, accepted = decide(steps, floor, tolerance, in_sample, shaped)
         untested = untested_note(steps, floor, tolerance)
         if untested:
             notes.append(untested)
