@@ -137,3 +137,28 @@ def test_a_jacobian_that_does_not_fit_the_residual_is_not_taken():
             return np.full(3, 1e3)
 
     assert _converged_at(Failing(), np.array([0.5, 1.0]), jac) is None
+
+
+@pytest.mark.parametrize("success, on_budget, taken", [(True, False, True),
+                                                       (True, True, False),
+                                                       (False, False, False)])
+def test_a_diagnosis_refines_only_a_converged_fit_from_its_jacobian(monkeypatch, success,
+                                                                    on_budget, taken):
+    """A diagnosis' reported fit is refined from its own Jacobian where it converged; a
+    fit stopped on its budget, or not converged, is fitted again first."""
+    from types import SimpleNamespace
+
+    import pneunet.truth.circuits.candidate_fits as cf
+
+    seen = {}
+    monkeypatch.setattr(cf, "fit_trace", lambda *a, **kw: seen.update(kw))
+    fitting = cf.CandidateFits(None, None, {}, {}, "tank", None, None,
+                               SimpleNamespace(values={}), None, None, "here", None, 1.0, 1.5)
+    jac = np.ones((5, 2))
+    fit = SimpleNamespace(effects=(), values={"Rout": 1.0}, start_state="state",
+                          success=success, on_budget=on_budget, extras={"jacobian": jac})
+    fitting.refined(fit, 40)
+    assert seen["refined"] and seen["start_state"] == "state"
+    assert seen["x_start"] == {"Rout": 1.0}
+    assert (seen["converged_jac"] is jac) is taken
+    assert taken or seen["converged_jac"] is None
