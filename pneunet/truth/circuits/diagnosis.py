@@ -29,8 +29,8 @@ import numpy as np
 from ...common.reprs import Summarized, listed, number
 from ..core.locate import best_lag, hot_phases, phase_profile
 from ..core.noise import ROUNDING_SIGMA, difference_sigma, resolution, segments
-from ..core.verdict import (NEAR_FLOOR, NEAR_GAIN, TOLERANCE, Step, at_floor, decide, needs_candidates,
-                            structured, untested_note)
+from ..core.verdict import (NEAR_FLOOR, NEAR_GAIN, TOLERANCE, Step, at_floor, decide,
+                            needs_candidates, structured, untested_note)
 from ..core.waterfall import Waterfall
 from .align import thinned
 from .candidate_fits import (CandidateFits, at_bound, base_refit, fit_limits, fit_pairs,

@@ -356,11 +356,11 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
         res = least_squares_log(fun, x0, lb, ub, max_nfev=max_nfev, diff_step=diff_step,
                                 pool=pool, give_up=None if give_up_rms is None
                                 else give_up_rms ** 2 * fun.size())
-    if clock_step and res.message != CONVERGED_BEFORE:
-        res = fit_clock(res, fun, x0, lb, ub, model, df, state,
-                        not isinstance(start_state, StartState) if clock_starts is None
-                        else clock_starts, max_nfev=max_nfev,
-                        diff_step=diff_step, pool=pool)
+        if clock_step:
+            res = fit_clock(res, fun, x0, lb, ub, model, df, state,
+                            not isinstance(start_state, StartState) if clock_starts is None
+                            else clock_starts, max_nfev=max_nfev,
+                            diff_step=diff_step, pool=pool)
     if refined and res.success:
         res, fun, model = refine_fit(res, fun, lb, ub, max_nfev, pool)
         diff_step = REFINE_DIFF_STEP if model.options == REFINE_OPTIONS else diff_step
