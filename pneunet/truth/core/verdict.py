@@ -35,7 +35,8 @@ NEAR_GAIN = 0.1
 #: strongly autocorrelated (Ljung–Box p-value below this) is screened too, and yields to
 #: an effect NEAR_GAIN below it: the two tanks driven by a sine, heat exchange in tank 1,
 #: base at 1.199× with p = 1e-230 was adequate with R₁ 5 % off; their clean records gave
-#: p = 0.03–0.48 (white noise: p uniform, below 1e-6 once in a million records)
+#: p = 0.03–0.48 (white noise: p about uniform, the smallest of a record's signals
+#: below 1e-6 about once per million signals)
 STRUCTURE_P = 1e-6
 
 
@@ -112,8 +113,8 @@ def decide(steps: list[Step], floor: float, tolerance: float = TOLERANCE,
     first step at the floor is accepted; for a base within ``tolerance`` but above
     :data:`NEAR_FLOOR` × floor, the first step below that and :data:`NEAR_GAIN` under
     the base (a base below that too, when its residuals are ``structured``:
-    :func:`needs_candidates`).  ``in_sample``: nothing was held out (the errors are the fitted window's),
-    and a step of two effects or more counts as at the floor only within
+    :func:`needs_candidates`).  ``in_sample``: nothing was held out (the errors are the
+    fitted window's), and a step of two effects or more counts as at the floor only within
     :data:`NEAR_FLOOR` × floor: fitted to the very samples it is judged on, a pair
     mimics what the library lacks (the two tanks with a 30 mL dead end behind a line,
     each recorded once through the supply's step: heat exchange with a tube, 1.43× and
