@@ -136,7 +136,7 @@ def test_a_base_within_near_floor_with_structured_residuals_yields_to_a_clearly_
 
 
 def test_structure_is_a_ljung_box_p_far_below_the_whites():
-    from pneunet.truth.core.verdict import STRUCTURE_P, structured
+    from pneunet.truth.core.verdict import STRUCTURE_P, strongly_structured as structured
 
     assert structured(1e-230) and structured(0.1 * STRUCTURE_P)
     assert not structured(STRUCTURE_P) and not structured(0.03) and not structured(0.48)

@@ -131,6 +131,7 @@ def test_a_jacobian_that_does_not_fit_the_residual_is_not_taken():
     assert res.success and res.nfev == 1 and np.allclose(res.fun, 1.5) and res.jac is not jac
     assert _converged_at(Residual(), np.array([0.5, 1.0]), jac[:, :1]) is None
     assert _converged_at(Residual(), np.array([0.5, 1.0]), None) is None
+
     class Failing(Residual):
         def __call__(self, x):
             self.failures += 1

@@ -30,7 +30,7 @@ from ...common.reprs import Summarized, listed, number
 from ..core.locate import best_lag, hot_phases, phase_profile
 from ..core.noise import ROUNDING_SIGMA, difference_sigma, resolution, segments
 from ..core.verdict import (NEAR_FLOOR, NEAR_GAIN, TOLERANCE, Step, at_floor, decide,
-                            needs_candidates, structured, untested_note)
+                            needs_candidates, strongly_structured, untested_note)
 from ..core.waterfall import Waterfall
 from .align import thinned
 from .candidate_fits import (CandidateFits, at_bound, base_refit, fit_limits, fit_pairs,
@@ -273,11 +273,11 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
         cand = candidates_for(circuit, effects)
         # a base within NEAR_FLOOR whose residuals are strongly structured is screened too
         lb_p = base.extras["intervals"].get("ljung_box_p", math.nan)
-        shaped = structured(lb_p)
-        verdict, accepted = decide(steps, floor, tolerance, in_sample, shaped)
+        structured_base = strongly_structured(lb_p)
+        verdict, accepted = decide(steps, floor, tolerance, in_sample, structured_base)
         fitting = CandidateFits(build, df, params, fixed, node, train, test, base, pool,
                                 options, where, state, floor, tolerance)
-        if cand and needs_candidates(steps[0].worst, floor, tolerance, shaped):
+        if cand and needs_candidates(steps[0].worst, floor, tolerance, structured_base):
             if not needs_candidates(steps[0].worst, floor, tolerance):
                 notes.append(
                     f"base model within {NEAR_FLOOR:g}× the floor "
@@ -320,7 +320,7 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
                     noise, floor = nb, nb["floor"]
                     noise["model"] = best
                     fitting.floor = floor
-                verdict, accepted = decide(steps, floor, tolerance, in_sample, shaped)
+                verdict, accepted = decide(steps, floor, tolerance, in_sample, structured_base)
                 if verdict == "unexplained":
                     t0 = time.perf_counter()
                     seconds = second_effects(fits, best, fitted, cand, params, fitting,
@@ -337,7 +337,7 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
                 ranking = [r if r["effect"] != "none" else _row("none", base, test, floor)
                            for r in ranking]
         # the steps' floor ratios may have changed with the floor: decide once more
-        verdict, accepted = decide(steps, floor, tolerance, in_sample, shaped)
+        verdict, accepted = decide(steps, floor, tolerance, in_sample, structured_base)
         name = " + ".join(accepted) or "none"
         if verdict != "unexplained" and refine_final(fits, name, fitting,
                                                      BASE_BUDGET * max_nfev, notes, say):
@@ -348,7 +348,7 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
                        _row(name, fits[name], test, floor, fitting.starts.get(name))
                        for r in ranking]
             base = fits["none"]
-            verdict, accepted = decide(steps, floor, tolerance, in_sample, shaped)
+            verdict, accepted = decide(steps, floor, tolerance, in_sample, structured_base)
         untested = untested_note(steps, floor, tolerance)
         if untested:
             notes.append(untested)

@@ -351,7 +351,7 @@ def fit_trace(build: Callable, data, params: dict, *, fixed: dict | None = None,
     # each initial pressure fitted costs a Jacobian column per step: it adds its share
     own = len(names) - sum(k in state.fitted for k in names)
     max_nfev = math.ceil(max_nfev * len(names) / max(own, 1))
-    res = _converged_at(fun, x0, converged_jac) if refined else None
+    res = _converged_at(fun, x0, converged_jac) if refined and x_start is not None else None
     if res is None:
         res = least_squares_log(fun, x0, lb, ub, max_nfev=max_nfev, diff_step=diff_step,
                                 pool=pool, give_up=None if give_up_rms is None

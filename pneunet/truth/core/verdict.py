@@ -93,7 +93,7 @@ def needs_candidates(base_error: float, floor: float, tolerance: float = TOLERAN
     return not at_floor(base_error, floor, 1.0 if structured else min(NEAR_FLOOR, tolerance))
 
 
-def structured(ljung_box_p: float) -> bool:
+def strongly_structured(ljung_box_p: float) -> bool:
     """Whether residuals with this Ljung–Box p-value are structured enough to look for
     a missing effect below :data:`NEAR_FLOOR` × the floor (:data:`STRUCTURE_P`)."""
     return bool(math.isfinite(ljung_box_p) and ljung_box_p < STRUCTURE_P)
