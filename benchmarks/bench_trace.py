@@ -14,7 +14,14 @@ tested on stand-alone recordings in tests/traces/).
 from __future__ import annotations
 
 import argparse
+import resource
 import time
+
+
+def cpu_s() -> float:
+    """CPU seconds of this process and of its ended children (the pool's workers)."""
+    own, kids = (resource.getrusage(w) for w in (resource.RUSAGE_SELF, resource.RUSAGE_CHILDREN))
+    return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
 
 
 def main(argv=None) -> None:
@@ -48,16 +55,17 @@ def main(argv=None) -> None:
     if pool is not None:
         pool.shutdown()
 
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), cpu_s()
     diag = diagnose_trace(oscillator, rec, params, node="tank", workers=args.workers)
-    whole_s = time.perf_counter() - t0
+    whole_s, whole_cpu = time.perf_counter() - t0, cpu_s() - c0
 
     print(f"recording: {args.t_end:g} s at 20 Hz from {args.start:g} s after switch-on, "
           f"p_tank and p_out, V = {args.V:g} mL, hidden n = {args.n:g}; start state "
           f"{diag.final.start_state.mode}")
     print(f"{'':34}{'wall s':>8}{'simulations':>13}")
     print(f"{'base fit (3 parameters)':34}{base_s:8.1f}{fit.nfev:13d}")
-    print(f"{'whole diagnosis':34}{whole_s:8.1f}{diag.timing['simulations']:13d}")
+    print(f"{'whole diagnosis':34}{whole_s:8.1f}{diag.timing['simulations']:13d}"
+          f"   (CPU {whole_cpu:.1f} s, workers included)")
     print(f"whole / base fit: {whole_s / base_s:.1f}x;  verdict {diag.verdict}, accepted "
           f"{diag.accepted}, held-out {diag.waterfall.steps[-1].held_out:.3g} kPa vs floor "
           f"{diag.noise_floor:.3g} kPa")

@@ -103,13 +103,16 @@ def test_a_converged_fit_is_refined_from_its_jacobian_without_being_fitted_again
     """A diagnosis refines its reported fit after fitting it: from the fit's values and
     Jacobian it needs no LM at the fit's own tolerance first (a Jacobian and a step to
     stay where it is; from this fit, stopped by a cliff 6 standard errors off, 144
-    simulations).  It ends where the fit refined in one go does, on a few simulations
-    more than the refinement alone."""
+    simulations).  It ends at an optimum at least as low as the fit refined in one go
+    (beside the cliff the cost is rough: chord steps from the fit's Jacobian, its
+    cliff's column from the other side, end 0.7 % lower in cost than LM refining the
+    unrefined fit), within reach of the truth, on no more simulations than the
+    refinement alone."""
     direct = _fit(record, converged_jac=plain.extras["jacobian"], x_start=plain.values,
                   start_state=plain.start_state)
+    assert direct.error() <= refined.error() * (1 + 1e-4), (direct.error(), refined.error())
     for k in TRUTH:
-        assert abs(math.log(direct.values[k] / refined.values[k])) \
-            < 0.2 * refined.stderr_log[k], k
+        assert abs(math.log(direct.values[k] / TRUTH[k])) < 4.5 * direct.stderr_log[k], k
     assert direct.nfev - 1 <= refined.nfev - plain.nfev, (direct.nfev, refined.nfev, plain.nfev)
     assert direct.message != CONVERGED_BEFORE  # the refinement's LM ran
 
@@ -163,3 +166,69 @@ def test_a_diagnosis_refines_only_a_converged_fit_from_its_jacobian(monkeypatch,
     assert seen["x_start"] == {"Rout": 1.0}
     assert (seen["converged_jac"] is jac) is taken
     assert taken or seen["converged_jac"] is None
+
+
+def _decay_problem():
+    """A quiet decay (standard errors ~1e-4): its residual, bounds, optimum and standard
+    errors (scipy at tight tolerances, an independent reference)."""
+    from scipy import optimize
+
+    t = np.linspace(0.0, 1.0, 50)
+    y = 2.0 * np.exp(-t / 0.3) + 5e-5 * np.random.default_rng(1).normal(0.0, 1.0, t.size)
+    calls = []
+
+    def residual(x):
+        calls.append(np.array(x))
+        return np.exp(x[0]) * np.exp(-t / np.exp(x[1])) - y
+
+    ref = optimize.least_squares(residual, np.log([1.5, 0.5]), xtol=1e-15, ftol=1e-15,
+                                 gtol=1e-15).x
+    jac = np.column_stack([(residual(ref + h) - residual(ref)) / 1e-7
+                           for h in np.eye(2) * 1e-7])
+    s2 = float(residual(ref) @ residual(ref)) / (t.size - 2)
+    se = np.sqrt(s2 * np.diag(np.linalg.inv(jac.T @ jac)))
+    calls.clear()
+    return residual, calls, (np.log([0.1, 0.01]), np.log([10.0, 10.0])), ref, se
+
+
+def test_chord_steps_from_a_fit_several_standard_errors_off_reach_the_optimum():
+    """A fit stopped 6 standard errors off its optimum, with a Jacobian differenced
+    coarsely (1 % steps), is refined by chord Gauss–Newton steps: it ends within a fifth
+    of a standard error of scipy's optimum on a handful of evaluations (LM spends a
+    Jacobian per step), its last Jacobian differenced at the point it ends on or the one
+    before."""
+    from pneunet.truth.core.lsq import CHORD_MESSAGE, LsqResult
+
+    residual, calls, (lb, ub), ref, se = _decay_problem()
+    x0 = ref + 6.0 * se * np.array([1.0, -1.0])
+    coarse = np.column_stack([(residual(x0 + h) - residual(x0)) / 1e-2
+                              for h in np.eye(2) * 1e-2])
+    calls.clear()
+    res = LsqResult(x0, residual(x0), coarse, 3, True, "converged")
+    calls.clear()
+    again = refine(residual, res, lb, ub, max_nfev=60, diff_step=1e-3, xtol=5e-4)
+    assert again.message == CHORD_MESSAGE and again.success
+    assert np.all(np.abs(again.x - ref) < 0.2 * se), ((again.x - ref) / se)
+    assert again.nfev == len(calls) <= 8, again.nfev
+    # the Jacobian it ends with was differenced on the residual, not the coarse one
+    assert not np.allclose(again.jac, coarse, rtol=1e-3)
+
+
+def test_chord_steps_that_do_not_lower_the_cost_leave_the_refinement_to_lm():
+    """A Jacobian that points the wrong way (its sign flipped): the first chord step
+    raises the cost, and LM refines from the fit's point as before, to the optimum; the
+    chord's evaluations are counted."""
+    from pneunet.truth.core.lsq import CHORD_MESSAGE, LsqResult
+
+    residual, calls, (lb, ub), ref, se = _decay_problem()
+    x0 = ref + 6.0 * se * np.array([1.0, -1.0])
+    jac = np.column_stack([(residual(x0 + h) - residual(x0)) / 1e-6
+                           for h in np.eye(2) * 1e-6])
+    res = LsqResult(x0, residual(x0), -jac, 3, True, "converged")
+    calls.clear()
+    again = refine(residual, res, lb, ub, max_nfev=60, diff_step=1e-3, xtol=5e-4)
+    assert again.message != CHORD_MESSAGE
+    # one chord step was tried (it raised the cost), then LM started at the fit's point
+    assert np.allclose(calls[0], x0, atol=1e-12) and np.allclose(calls[2], x0, atol=1e-12)
+    assert np.all(np.abs(again.x - ref) < 0.2 * se), ((again.x - ref) / se)
+    assert again.nfev == len(calls), (again.nfev, len(calls))

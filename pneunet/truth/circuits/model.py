@@ -103,13 +103,16 @@ class TraceModel:
             c.options = c.options.replace(**self.options)
         return c
 
-    def circuit(self, values: dict):
+    def circuit(self, values: dict, settle: bool = True):
+        """The circuit at ``values``: the netlist's, started from the start state, with
+        the effects in; ``settle`` False leaves the storage the effects add at the
+        ambient pressure (for reading its structure and values only, not to simulate)."""
         c = self.base_circuit(values)
         state = self.run_state
         if state is not None:
             state.apply(c, values)
         settled = None
-        if self.start == "ic" and (self.effects or c.options.dead_volume > 0):
+        if settle and self.start == "ic" and (self.effects or c.options.dead_volume > 0):
             settled = settled_pressures(c, state.time_offset if state else 0.0)
         old_nodes = set(c.nodes)
         for eff in self.effects:

@@ -106,12 +106,12 @@ def _roles(model, names, x):
     from ...physics.oscillator_branches import spec_from_circuit
 
     values = dict(zip(names, np.exp(x)))
-    base = spec_from_circuit(model.circuit(values))
+    base = spec_from_circuit(model.circuit(values, settle=False))
     roles = {}
     for i, k in enumerate(names):
         v = dict(values)
         v[k] = values[k] * 1.01
-        s = spec_from_circuit(model.circuit(v))
+        s = spec_from_circuit(model.circuit(v, settle=False))
         for field_ in ("Rout", "Rvent", "V"):
             a_, b_ = getattr(s, field_), getattr(base, field_)
             if field_ not in roles and math.isfinite(a_) and math.isfinite(b_) and a_ != b_:
@@ -149,6 +149,8 @@ def initial_values(model, names, x0, lb, ub, t_fit, y_meas, node, iterations: in
 
     from scipy import optimize
 
+    from ...physics.oscillator_branches import spec_from_circuit
+
     target = cycle_features(t_fit, y_meas)
     if target is None:
         return x0, {"method": "none", "error": "no full cycle in the record"}
@@ -161,7 +163,8 @@ def initial_values(model, names, x0, lb, ub, t_fit, y_meas, node, iterations: in
     sim_f = None
     for it in range(iterations):
         values = dict(zip(names, np.exp(x)))
-        spec = _roles(model, names, x)[1]
+        if it:  # the first iteration's is the one found with the roles
+            spec = spec_from_circuit(model.circuit(values, settle=False))
         if "Rout" in roles:
             i = roles["Rout"]
             scale = spec.Rout / math.exp(x[i])  # spec R_out per unit of the fitted parameter
