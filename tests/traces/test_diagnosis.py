@@ -200,3 +200,25 @@ def test_the_screens_simulations_are_all_counted(monkeypatch):
                        PARAMS, node="tank", effects=[DeadVolume("out")], workers=1)
     assert len(counted) > 5 + 2 * 3  # the grid, at least the first zoom's rounds, a step
     assert d.timing["screen_simulations"] == sum(counted)
+
+
+def test_every_fits_simulations_are_counted_the_refinement_too(monkeypatch):
+    """``timing.simulations`` counts the simulations of every fit, the base fit's and
+    its refinement's alike (the refined fit replaces the base fit it refines, whose count
+    stays); each fit's final simulation of its result is outside its count.  A clean
+    recording, `adequate`: nothing is screened.  Counted in this process (one worker)."""
+    from pneunet.truth.circuits.model import TraceModel
+
+    calls = []
+    simulate = TraceModel.simulate
+
+    def counting(self, *args, **kwargs):
+        calls.append(1)
+        return simulate(self, *args, **kwargs)
+
+    monkeypatch.setattr(TraceModel, "simulate", counting)
+    d = diagnose_trace(oscillator, oscillator_record(24.0, noise=0.4, seed=1), PARAMS,
+                       node="tank", workers=1)
+    assert d.verdict == "adequate" and "screen_simulations" not in d.timing
+    assert d.timing["refine_simulations"] > 0
+    assert d.timing["simulations"] + 2 == len(calls), (d.timing, len(calls))

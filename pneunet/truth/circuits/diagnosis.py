@@ -339,8 +339,14 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
         # the steps' floor ratios may have changed with the floor: decide once more
         verdict, accepted = decide(steps, floor, tolerance, in_sample, structured_base)
         name = " + ".join(accepted) or "none"
+        unrefined, uncounted = fits[name], 0
         if verdict != "unexplained" and refine_final(fits, name, fitting,
                                                      BASE_BUDGET * max_nfev, notes, say):
+            timing["refine_simulations"] = fits[name].extras.get("simulations", 0)
+            # the base model and pairs are counted through fits (the refined one now),
+            # single effects through their starts
+            uncounted = (unrefined if name == "none" or " + " in name
+                         else fits[name]).extras.get("simulations", 0)
             step = next(i for i, s in enumerate(steps) if list(s.effects) == accepted)
             steps[step] = replace(steps[step], held_out=fits[name].error(test),
                                   train=fits[name].error(train))
@@ -378,7 +384,8 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
     # every fit tried, kept or not (the screen's are in screen_simulations)
     timing["simulations"] = sum(f.extras.get("simulations", 0) for n, f in fits.items()
                                 if n == "none" or " + " in n) \
-        + sum(st["simulations"] or 0 for tried in fitting.starts.values() for st in tried)
+        + sum(st["simulations"] or 0 for tried in fitting.starts.values() for st in tried) \
+        + uncounted
     wf = Waterfall(steps, floor, unit)
     return TraceDiagnosis(verdict, accepted, floor, unit, ranking, fits, wf, where_txt,
                           {k: v for k, v in noise.items()}, train, test, timing, notes,
