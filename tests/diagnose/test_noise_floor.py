@@ -103,3 +103,58 @@ def test_record_sigma_of_a_swinging_record_is_its_noise():
     assert np.isnan(record_sigma(y[:4]))  # no fourth difference
     assert np.isnan(record_sigma(y[:13]))  # 9 differences < 10
     assert np.isfinite(record_sigma(y[:14]))  # 10 differences
+
+
+def _ar1(phi, n, seed):
+    """AR(1) noise of coefficient ``phi`` and unit variance (a first-order filter of white
+    noise, written out here)."""
+    w = np.random.default_rng(seed).standard_normal(n + 200)
+    e = np.zeros_like(w)
+    for i in range(1, len(w)):
+        e[i] = phi * e[i - 1] + np.sqrt(1.0 - phi ** 2) * w[i]
+    return e[200:]
+
+
+def test_second_difference_correlation_of_white_and_ar1_noise_against_their_formulas():
+    """White noise's second differences correlate at −2/3 from sample to sample; AR(1)
+    noise's at (−4 + 7φ − 4φ² + φ³)/(6 − 8φ + 2φ²) (the covariance of
+    e[i−1] − 2e[i] + e[i+1] with its neighbour, by hand); a few sharp corners (a valve's
+    switching in a model error) do not move the robust estimate; pairs do not span
+    groups."""
+    from pneunet.truth.core.noise import WHITE_D2_CORRELATION, difference_correlation
+
+    n = 4000
+    se = 1.05 / np.sqrt(n)
+    white = np.random.default_rng(3).standard_normal(n)
+    c, pairs = difference_correlation(white)
+    assert pairs == n - 3 and abs(c - WHITE_D2_CORRELATION) < 4 * se, c
+    for phi in (0.3, 0.7):
+        want = (-4 + 7 * phi - 4 * phi ** 2 + phi ** 3) / (6 - 8 * phi + 2 * phi ** 2)
+        c, _ = difference_correlation(_ar1(phi, n, seed=4))
+        assert abs(c - want) < 5 * se, (phi, c, want)
+    corners = white.copy()
+    corners[::200] += 30.0  # a kink every 200 samples
+    assert abs(difference_correlation(corners)[0] - WHITE_D2_CORRELATION) < 4 * se
+    groups = np.repeat([0, 1], n // 2)
+    assert difference_correlation(white, groups)[1] == n - 6
+    assert np.isnan(difference_correlation(white[:20])[0])
+
+
+def test_the_coloured_noise_note_names_correlated_signals_only():
+    """A diagnosis' note for residuals whose second differences are correlated beyond
+    :data:`~pneunet.truth.circuits.diagnosis.COLOURED_SE` standard errors: named per
+    signal; white noise's (as measured) and too few pairs give none."""
+    from pneunet.truth.circuits.diagnosis import coloured_note
+    from pneunet.truth.core.noise import difference_correlation
+
+    n = 1800
+    white = difference_correlation(np.random.default_rng(5).standard_normal(n))
+    ar = difference_correlation(_ar1(0.7, n, seed=6))
+    note = coloured_note({"second_difference_correlation": {"p_t1": ar[0], "p_t2": white[0]},
+                          "correlation_pairs": {"p_t1": ar[1], "p_t2": white[1]}})
+    assert note is not None and "p_t1" in note and "p_t2" not in note
+    assert "--max-rows" in note
+    assert coloured_note({"second_difference_correlation": {"p_t2": white[0]},
+                          "correlation_pairs": {"p_t2": white[1]}}) is None
+    assert coloured_note({"second_difference_correlation": {"p": float("nan")},
+                          "correlation_pairs": {"p": 0}}) is None

@@ -28,7 +28,8 @@ import numpy as np
 
 from ...common.reprs import Summarized, listed, number
 from ..core.locate import best_lag, hot_phases, phase_profile
-from ..core.noise import ROUNDING_SIGMA, difference_sigma, resolution, segments
+from ..core.noise import (ROUNDING_SIGMA, WHITE_D2_CORRELATION, difference_correlation,
+                          difference_sigma, resolution, segments)
 from ..core.verdict import (NEAR_FLOOR, NEAR_GAIN, TOLERANCE, Step, at_floor, decide,
                             needs_candidates, strongly_structured, untested_note)
 from ..core.waterfall import Waterfall
@@ -127,13 +128,14 @@ def noise_floor(fit: TraceFit, grid: dict | None = None) -> dict:
     rounding of a signal recorded on a grid (``grid``: {signal: step in its unit},
     :func:`~pneunet.truth.core.noise.resolution`; step/√12); pooled as the rms over
     signals (in the fit's unit)."""
-    out, pooled = {}, []
+    out, pooled, correlated = {}, [], {}
     grid = grid or {}
     for s in fit.signals():
         scale = fit.scales.get(s, 1.0)
         r = fit.residuals[s].to_numpy() / scale
         ok = np.isfinite(r)
         sigma = difference_sigma(r, segments(ok))
+        correlated[s] = difference_correlation(r, segments(ok))
         if math.isfinite(sigma):
             sigma = float(max(sigma, grid.get(s, 0.0) * ROUNDING_SIGMA / scale))
         out[s] = sigma
@@ -148,7 +150,38 @@ def noise_floor(fit: TraceFit, grid: dict | None = None) -> dict:
         method += ("; at least the rounding of a signal logged on a grid, step/√12 ("
                    + ", ".join(f"{s} in steps of {q:.3g} {signal_unit(s)}".rstrip()
                                for s, q in grid.items()) + ")")
-    return {"floor": floor, "per_signal": out, "method": method, "resolution": grid}
+    return {"floor": floor, "per_signal": out, "method": method, "resolution": grid,
+            "second_difference_correlation": {k: v for k, (v, _) in correlated.items()},
+            "correlation_pairs": {k: n for k, (_, n) in correlated.items()}}
+
+
+#: standard errors (1.05/√n for n pairs) above white noise's −2/3 at which the residuals'
+#: second differences count as correlated from sample to sample (white noise: at most
+#: 2.1 in 30 records of 800 samples; AR(1) noise of φ 0.7 is 4 standard errors above at
+#: 800 samples, 6 at 1,800)
+COLOURED_SE = 3.5
+
+
+def coloured_note(noise: dict) -> str | None:
+    """A note where the residuals' second differences are correlated from sample to
+    sample (:func:`~pneunet.truth.core.noise.difference_correlation`, more than
+    :data:`COLOURED_SE` standard errors above white noise's): the floor, which assumes
+    white noise, is then low for a logger that filters; None otherwise."""
+    high = {s: c for s, c in noise.get("second_difference_correlation", {}).items()
+            if math.isfinite(c) and c > WHITE_D2_CORRELATION
+            + COLOURED_SE * 1.05 / math.sqrt(max(noise["correlation_pairs"][s], 1))}
+    if not high:
+        return None
+    which = ", ".join(f"{s} {c:.2f}" for s, c in high.items())
+    return (f"the residuals' second differences are correlated from sample to sample "
+            f"({which}; white noise gives {WHITE_D2_CORRELATION:.2f}): the noise floor, "
+            "which assumes white noise, is low where the logger or its sensor filters "
+            "(AR(1) noise of coefficient 0.7 shows about −0.52, and its floor is half "
+            "its σ), and a right model then looks wrong. If yours filters, thin the "
+            "record to samples a correlation time apart (--max-rows: a fifth of the "
+            "rows keeps every fifth) and diagnose again; a model error that varies within "
+            "a few samples (a ripple) correlates them too, and stays above the floor "
+            "when thinned")
 
 
 def signal_table(base: TraceFit, final: TraceFit, test, noise: dict,
@@ -366,6 +399,9 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
         if verdict != "unexplained" and driven:
             notes += repeating_note(circuit, df)
         where_txt = [] if verdict != "unexplained" else locate(final, test, floor, df, node)
+        coloured = coloured_note(noise_floor(final, grid)) if verdict == "unexplained" else None
+        if coloured:
+            notes.append(coloured)
         if verdict == "unexplained" and not where_txt:
             where_txt = ["the held-out error is above the floor on every signal by a similar "
                          "amount (no single place)"]
