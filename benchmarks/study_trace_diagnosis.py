@@ -191,7 +191,9 @@ def main(argv=None) -> None:
         ratio = f"{steps[0].held_out / d.noise_floor:.2f} → {steps[-1].held_out / d.noise_floor:.2f}"
         if steps[-1].worst > steps[-1].held_out:  # the fitted window's, where it is worse
             ratio += f" (fitted {steps[-1].worst / d.noise_floor:.2f})"
-        print(f"| {name} | {start:.1f} | {expected} | {d.verdict} | "
+        noted = any("correlated from sample to sample" in n for n in d.notes)
+        print(f"| {name} | {start:.1f} | {expected} | {d.verdict}"
+              f"{' (coloured-noise note)' if noted else ''} | "
               f"{', '.join(d.accepted) or '–'} | {ratio} | {d.final.start_state.mode} | "
               f"{'yes' if right(d, expected) else 'NO'} | {wall:.0f} ("
               + ", ".join(f"{d.timing.get(k, 0):.0f}" for k in ("base_fit_s", "screen_s",
