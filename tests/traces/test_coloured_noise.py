@@ -32,7 +32,8 @@ def test_an_unexplained_record_with_coloured_noise_says_so(phi, leak, noted):
         rec[column] += _ar1(len(rec), phi, 0.35, rng)
     d = diagnose_trace(NetlistBuilder("netlists/two_tanks_sine.pn"), rec,
                        {"R1": (0.7, 0.05, 5.0), "R2": (1.5, 0.1, 20.0)},
-                       fixed={"V1": TRUTH["V1"], "V2": TRUTH["V2"]}, node="t2", effects=[], start_state="record")
+                       fixed={"V1": TRUTH["V1"], "V2": TRUTH["V2"]}, node="t2", effects=[],
+                       start_state="record")
     assert d.verdict == "unexplained", d.report()
     said = [n for n in d.notes if "correlated from sample to sample" in n]
     assert bool(said) == noted, d.notes

@@ -399,7 +399,7 @@ def diagnose_trace(build, data, params: dict, *, fixed: dict | None = None, sign
         if verdict != "unexplained" and driven:
             notes += repeating_note(circuit, df)
         where_txt = [] if verdict != "unexplained" else locate(final, test, floor, df, node)
-        coloured = coloured_note(noise_floor(final, grid)) if verdict == "unexplained" else None
+        coloured = coloured_note(noise) if verdict == "unexplained" else None
         if coloured:
             notes.append(coloured)
         if verdict == "unexplained" and not where_txt:

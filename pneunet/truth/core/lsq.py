@@ -285,7 +285,9 @@ def refine(fun, res: LsqResult, lb, ub, *, max_nfev: int, diff_step: float, pool
 
     First chord Gauss–Newton steps with the fit's own Jacobian (:func:`chord_steps`: a
     simulation each, no new Jacobian until the step is small); where they do not get
-    there, LM from the fit's point (the simulations of both count)."""
+    there, LM from where they stopped (the simulations of both count).  A fit whose
+    Jacobian crossed a cliff (``res.other_jac``, :func:`_cliffs`) is left to LM from its
+    point: beside a cliff the cost is rough."""
     n, p = res.jac.shape
     s2 = float(res.fun @ res.fun) / max(n - p, 1)
     var = s2 * np.diag(np.linalg.pinv(res.jac.T @ res.jac))
@@ -322,16 +324,11 @@ def chord_steps(fun, res: LsqResult, lb, ub, radius: float, *, diff_step: float,
     Jacobian is differenced afresh.  A converged fit sits a few standard errors from the
     optimum of a finer simulation, where its Jacobian still points the way: a step or
     two and one Jacobian, where LM spends a Jacobian per step (the oscillator's
-    polytropic fit: 21 simulations, now 7).  A column of ``res.jac`` that crossed a cliff
-    (``res.other_jac``, :func:`_cliffs`) is the other side's, as the fit's intervals
-    take it.  The result at the last point kept; not ``success`` where a step does not
-    lower the cost (a rough cost beside a cliff, where LM's trust region does better) or
-    :data:`CHORD_STEPS` do not get there."""
+    polytropic fit: 21 simulations, now 7).  The result at the last point kept; not
+    ``success`` where a step does not lower the cost (a rough cost, where LM's trust
+    region does better) or :data:`CHORD_STEPS` do not get there."""
     lb, ub = np.asarray(lb, float), np.asarray(ub, float)
     x, jac = np.array(res.x, float), np.array(res.jac, float)
-    if res.other_jac is not None:
-        crossed = _cliffs(res.jac, res.other_jac) > 0
-        jac[:, crossed] = res.other_jac[:, crossed]
     r, nfev = np.asarray(fun(x), float), 1
     age = None  # steps since jac was differenced on fun (None: it is res.jac)
     for _ in range(CHORD_STEPS):

@@ -120,8 +120,8 @@ WHITE_D2_CORRELATION = -2.0 / 3.0
 
 def difference_correlation(r, groups=None, min_points: int = 30) -> tuple[float, int]:
     """(lag-1 autocorrelation of ``r``'s second differences, pairs used): robust
-    (Gnanadesikan–Kettenring, from the normalised MADs of the pairs' sums and
-    differences: a few sharp corners do not move it), within groups.  White noise gives
+    (Gnanadesikan–Kettenring, from the MADs of the pairs' sums and differences: a few
+    sharp corners do not move it), within groups.  White noise gives
     −2/3 (:data:`WHITE_D2_CORRELATION`, standard error about 1/√n); AR(1) noise of
     coefficient φ gives (−4 + 7φ − 4φ² + φ³)/(6 − 8φ + 2φ²): −0.59 at φ = 0.3, −0.52 at
     0.7, towards −1/2 as φ → 1.  NaN with fewer than ``min_points`` pairs."""
@@ -133,10 +133,8 @@ def difference_correlation(r, groups=None, min_points: int = 30) -> tuple[float,
     if len(pair) < min_points:
         return float("nan"), int(len(pair))
     a, b = d[pair], d[pair + 1]
-    scale = np.median(np.abs(np.concatenate([a, b]) - np.median(d)))
-    if not scale > 0:
-        return float("nan"), int(len(pair))
-    a, b = a / scale, b / scale
     u = np.median(np.abs((a + b) - np.median(a + b))) ** 2
     v = np.median(np.abs((a - b) - np.median(a - b))) ** 2
+    if not u + v > 0:
+        return float("nan"), int(len(pair))
     return float((u - v) / (u + v)), int(len(pair))
